@@ -1,0 +1,121 @@
+// filmgrain: rendering a negative from a scene-linear image.
+//
+// Conventions shared by every entry point:
+// - Units: film coordinates in micrometres, times in seconds, exposure in
+//   lux-seconds; every physical name carries its unit.
+// - Errors: a Status whose message names the field, its value and the rule.
+// - Determinism: the output for a given (stock, scene, input, scan size) is
+//   bit-identical for any thread count, tile size and ROI containing the
+//   pixel; a different seed gives a different grain pattern.
+// - Threads: nthreads = 0 means all hardware threads.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "filmgrain/image.h"
+#include "filmgrain/status.h"
+#include "filmgrain/stock.h"
+
+namespace filmgrain {
+
+/// The shot: how the scene is exposed onto the film (MODEL.md 1-2).
+struct SceneSettings {
+    /// Exposure offset in stops (2^stops on every exposure). [-64, 64].
+    double exposure_stops = 0.0;
+    /// Time the shutter is open, seconds; 1/48 s is a 180-degree shutter at
+    /// 24 fps. (0, 1e7].
+    double shutter_s = 1.0 / 48.0;
+    /// Width of the film frame, millimetres (Super 35 by default). (0, 1e9].
+    double frame_width_mm = 24.89;
+    /// Selects the grain pattern and every random outcome.
+    uint64_t seed = 0;
+
+    Status validate() const;
+};
+
+/// Which engine simulates the grains.
+enum class Engine {
+    exact,  ///< the reference: every photon and latent-image event simulated
+};
+
+/// Name of an engine as used on the command line and in metadata.
+const char* engine_name(Engine engine);
+/// Parse an engine name; false if unknown.
+bool parse_engine(const std::string& name, Engine& out);
+
+/// Reports progress in [0, 1]; return false to cancel the render. Called
+/// from the thread that called render_negative, at most ~10 times a second.
+using ProgressCallback = std::function<bool(double fraction_done)>;
+
+/// How to render: engine, scan resolution, region, threads.
+struct RenderSettings {
+    Engine engine = Engine::exact;
+    /// Scan (output) width in pixels over the whole frame; 0: the input's.
+    int64_t scan_width = 0;
+    /// Scan height; 0: the frame's aspect at scan_width (or the input's).
+    int64_t scan_height = 0;
+    /// Region of the scan to render; empty: the whole scan.
+    Roi roi;
+    /// Worker threads; 0: all hardware threads.
+    int nthreads = 0;
+    /// Side of the square tiles the work is split into, scan pixels.
+    /// Affects speed only, never the output. [1, 4096].
+    int tile_size_px = 64;
+    /// Optional progress reporting and cancellation.
+    ProgressCallback progress;
+};
+
+/// The scan's geometry for a given input size (MODEL.md 1).
+struct ScanGeometry {
+    int64_t width          = 0;  ///< scan pixels across the frame
+    int64_t height         = 0;
+    double frame_width_um  = 0.0;
+    double frame_height_um = 0.0;
+    double input_pitch_um  = 0.0;  ///< input pixel side
+    double pitch_x_um      = 0.0;  ///< scan pixel width
+    double pitch_y_um      = 0.0;  ///< scan pixel height
+};
+
+/// The scan an input of input_width x input_height gives with `settings`.
+Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
+                     const RenderSettings& settings, ScanGeometry& out);
+
+/// What happened in one layer. Grains are counted once each: those whose
+/// centre lies in the rendered region (grains outside it that reach into it
+/// are simulated but not counted).
+struct LayerStats {
+    std::string name;
+    uint64_t grains           = 0;  ///< grains with centres in the region
+    uint64_t developed        = 0;  ///< of those, developed (fog included)
+    uint64_t absorbed_photons = 0;  ///< photons they absorbed
+    uint64_t kinetics_events  = 0;  ///< latent-image events simulated for them
+    double mean_density       = 0.0;  ///< mean output density of the region
+};
+
+/// What the input held, over the input pixels the render read.
+struct InputStats {
+    uint64_t pixels_read      = 0;
+    uint64_t nonfinite_pixels = 0;  ///< a NaN or Inf channel: zero exposure
+    uint64_t negative_pixels  = 0;  ///< a negative channel (negative v: zero)
+};
+
+/// Statistics of a render, for --stats and tests.
+struct RenderStats {
+    std::string engine;
+    std::vector<LayerStats> layers;
+    InputStats input;
+    double simulate_seconds = 0.0;
+};
+
+/// Renders negative density (MODEL.md 1-5). `input` is scene-linear (1 or
+/// >= 3 channels). `density` receives roi.width() x roi.height() pixels of
+/// stock.layers.size() interleaved floats (layer order), row-major, where
+/// roi is settings.roi or the whole scan. `stats` may be null.
+/// Thread safety: reentrant; uses its own worker threads.
+Status render_negative(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                       const RenderSettings& settings, float* density, RenderStats* stats);
+
+}  // namespace filmgrain

@@ -1,0 +1,93 @@
+// filmgrain: film stocks (MODEL.md section 6).
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "filmgrain/status.h"
+
+namespace filmgrain {
+
+/// One grain population of a layer: a homogeneous Poisson process of
+/// lognormal discs with its own quantum efficiency and latent-image rates
+/// (MODEL.md 1-3). Defaults are the paper's scale and MODEL.md section 7.
+struct Population {
+    /// Grain centres per square micrometre. Range (0, 100].
+    double grains_per_um2 = 0.1;
+    /// Mean disc diameter, micrometres. Range [0.01, 1000].
+    double diameter_um = 6.0;
+    /// Log-space standard deviation of the diameter. Range [0, 1.5].
+    double diameter_log_sigma = 0.3;
+    /// Probability that a grain absorbs a photon landing on it. Range [0, 1].
+    double quantum_efficiency = 0.05;
+    /// Pairing rate constant (two free electrons -> 2-centre), 1/s. [0, 1e15].
+    double k_pair_per_s = 1e7;
+    /// Growth rate constant (electron joins a centre), 1/s. [0, 1e15].
+    double k_join_per_s = 1e6;
+    /// Loss rate constant (recombination, other traps), 1/s. [0, 1e15].
+    double k_loss_per_s = 10.0;
+    /// Rates scale per grain by (area / mean area)^(-exponent). [-4, 4].
+    double rate_area_exponent = 0.0;
+};
+
+/// One emulsion layer: an output channel.
+struct Layer {
+    /// Output channel name (non-empty, unique within the stock).
+    std::string name = "Y";
+    /// Weights on scene-linear RGB giving the layer's exposure value v.
+    /// Each in [0, 100], not all zero.
+    std::array<double, 3> sensitivity = { 0.2126, 0.7152, 0.0722 };
+    /// At least one population.
+    std::vector<Population> populations = { Population() };
+};
+
+/// A film stock: its layers and its processing (MODEL.md 2, 4, 5).
+struct Stock {
+    std::string name        = "unnamed";
+    std::string description = "";
+    /// Exposure (lux-seconds) that a scene-linear 0.18 grey receives at
+    /// exposure offset 0. Range (0, 1e6].
+    double exposure_at_grey_lxs = 0.01;
+    /// Development time, seconds. Range [0, 1e7].
+    double development_time_s = 360.0;
+    /// Development efficiency time constant: d = 1 - exp(-t / tau). (0, 1e12].
+    double development_tau_s = 120.0;
+    /// Fog time constant: f = 1 - exp(-t / fog_tau). Range (0, 1e30].
+    double fog_tau_s = 5000.0;
+    /// Density added to every pixel (film base). Range [0, 10].
+    double base_density = 0.0;
+    /// Clamp of the density computed from transmittance. Range (0, 20].
+    double max_density = 4.0;
+    /// One to 16 layers.
+    std::vector<Layer> layers = { Layer() };
+
+    /// Check every field against its range; the message names the field
+    /// (as a JSON path such as layers[1].populations[0].diameter_um), its
+    /// value and the allowed range.
+    Status validate() const;
+};
+
+/// Parse a stock from JSON text (MODEL.md 6). Unknown keys, wrong types and
+/// out-of-range values are errors naming the key; absent keys take the
+/// defaults above. `origin` (a file name or "preset NAME") prefixes errors.
+/// The result is validated.
+Status parse_stock_json(const std::string& text, const std::string& origin, Stock& out);
+
+/// The stock as JSON text with every key present (the full, resolved stock):
+/// what goes into output metadata. parse_stock_json(stock_to_json(s)) == s.
+std::string stock_to_json(const Stock& stock, int indent = -1);
+
+/// Names of the built-in presets, the default first.
+std::vector<std::string> preset_names();
+
+/// The name of the default preset (the three-layer colour negative).
+const char* default_preset_name();
+
+/// The JSON text of a built-in preset, or an empty string if unknown.
+std::string preset_json(const std::string& name);
+
+/// Load a built-in preset by name, or else a JSON file by path.
+Status load_stock(const std::string& name_or_path, Stock& out);
+
+}  // namespace filmgrain

@@ -1,0 +1,118 @@
+// MODEL.md section 2: exposure.
+#include "exposure.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace filmgrain {
+
+double exposure_lxs_per_unit_value(double exposure_at_grey_lxs, double exposure_stops)
+{
+    return exposure_at_grey_lxs / kGreyValue * std::exp2(exposure_stops);
+}
+
+namespace {
+
+/// Area of the disc of radius r centred at the origin within [0, x] x [0, y]
+/// for x, y >= 0.
+double quadrant_area(double x, double y, double r)
+{
+    x = std::min(x, r);
+    y = std::min(y, r);
+    const double r2 = r * r;
+    if (x * x + y * y <= r2)
+        return x * y;
+    // The circle's height at x is below y: columns [0, xc] are full height y,
+    // columns [xc, x] end on the circle. I(a) = integral_0^a sqrt(r^2-u^2) du.
+    const double xc = std::sqrt(std::max(0.0, r2 - y * y));
+    const auto integral = [&](double a) {
+        const double s = std::clamp(a / r, -1.0, 1.0);
+        return 0.5 * (a * std::sqrt(std::max(0.0, r2 - a * a)) + r2 * std::asin(s));
+    };
+    return y * xc + (integral(x) - integral(xc));
+}
+
+/// Signed version: the integral over [0, x] x [0, y] with orientation.
+double signed_quadrant_area(double x, double y, double r)
+{
+    const double a = quadrant_area(std::fabs(x), std::fabs(y), r);
+    return ((x < 0.0) != (y < 0.0)) ? -a : a;
+}
+
+}  // namespace
+
+double disc_rect_area_um2(double cx_um, double cy_um, double r_um, double x0_um, double y0_um,
+                          double x1_um, double y1_um)
+{
+    const double ax = x0_um - cx_um, bx = x1_um - cx_um;
+    const double ay = y0_um - cy_um, by = y1_um - cy_um;
+    if (ax >= r_um || bx <= -r_um || ay >= r_um || by <= -r_um || r_um <= 0.0)
+        return 0.0;
+    const double area = signed_quadrant_area(bx, by, r_um) - signed_quadrant_area(ax, by, r_um)
+                        - signed_quadrant_area(bx, ay, r_um)
+                        + signed_quadrant_area(ax, ay, r_um);
+    return std::max(0.0, area);
+}
+
+LayerExposure::LayerExposure(const ImageView& input, const std::array<double, 3>& sensitivity,
+                             double input_pitch_um)
+    : m_input(input)
+    , m_sensitivity(sensitivity)
+    , m_grey_weight(sensitivity[0] + sensitivity[1] + sensitivity[2])
+    , m_pitch_um(input_pitch_um)
+{
+}
+
+double LayerExposure::value_at(double x_um, double y_um) const
+{
+    const double fx = std::floor(x_um / m_pitch_um), fy = std::floor(y_um / m_pitch_um);
+    if (fx < 0.0 || fy < 0.0 || fx >= static_cast<double>(m_input.width)
+        || fy >= static_cast<double>(m_input.height))
+        return 0.0;
+    return value(static_cast<int64_t>(fx), static_cast<int64_t>(fy));
+}
+
+double LayerExposure::integrate_over_disc(double cx_um, double cy_um, double r_um) const
+{
+    const double p = m_pitch_um;
+    // Input pixels the disc's bounding box touches, clipped to the image.
+    const double w = static_cast<double>(m_input.width), h = static_cast<double>(m_input.height);
+    const double fx0 = std::floor((cx_um - r_um) / p), fx1 = std::floor((cx_um + r_um) / p);
+    const double fy0 = std::floor((cy_um - r_um) / p), fy1 = std::floor((cy_um + r_um) / p);
+    if (fx1 < 0.0 || fy1 < 0.0 || fx0 >= w || fy0 >= h)
+        return 0.0;
+    if (fx0 == fx1 && fy0 == fy1)  // the disc lies inside one pixel
+        return value(static_cast<int64_t>(fx0), static_cast<int64_t>(fy0)) * M_PI * r_um * r_um;
+
+    const int64_t ix0 = static_cast<int64_t>(std::max(fx0, 0.0));
+    const int64_t iy0 = static_cast<int64_t>(std::max(fy0, 0.0));
+    const int64_t ix1 = static_cast<int64_t>(std::min(fx1, w - 1.0));
+    const int64_t iy1 = static_cast<int64_t>(std::min(fy1, h - 1.0));
+    const int64_t nx = ix1 - ix0 + 1, ny = iy1 - iy0 + 1;
+    // Signed quadrant function at the (nx+1) x (ny+1) pixel corners, relative
+    // to the centre; a pixel's share is the difference of its four corners.
+    thread_local std::vector<double> corners;
+    corners.resize(static_cast<size_t>((nx + 1) * (ny + 1)));
+    for (int64_t j = 0; j <= ny; ++j) {
+        const double y = static_cast<double>(iy0 + j) * p - cy_um;
+        for (int64_t i = 0; i <= nx; ++i) {
+            const double x = static_cast<double>(ix0 + i) * p - cx_um;
+            corners[static_cast<size_t>(j * (nx + 1) + i)] = signed_quadrant_area(x, y, r_um);
+        }
+    }
+    double sum = 0.0;
+    for (int64_t j = 0; j < ny; ++j)
+        for (int64_t i = 0; i < nx; ++i) {
+            const double v = value(ix0 + i, iy0 + j);
+            if (v == 0.0)
+                continue;
+            const size_t c00 = static_cast<size_t>(j * (nx + 1) + i);
+            const size_t c10 = c00 + static_cast<size_t>(nx + 1);
+            const double area = corners[c10 + 1] - corners[c10] - corners[c00 + 1] + corners[c00];
+            sum += v * std::max(0.0, area);
+        }
+    return sum;
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,124 @@
+// MODEL.md section 1: the frame, its pixel grids, and the grain processes.
+#include "geometry.h"
+
+#include <cmath>
+#include <limits>
+
+#include "rng.h"
+#include "sampling.h"
+
+namespace filmgrain {
+
+namespace {
+
+/// Bin 0 holds z <= 3 (99.87% of grains); higher bins double the diameter.
+constexpr double kFirstBinTopZ = 3.0;
+/// Diameters with z above this are not generated (Q(9) = 1.1e-19).
+constexpr double kTruncationZ = 9.0;
+/// Expected grains per cell: trades per-cell overhead against grains
+/// generated outside the region asked for.
+constexpr double kGrainsPerCell = 16.0;
+
+}  // namespace
+
+Status FrameGeometry::make(double frame_width_mm, int64_t input_width, int64_t input_height,
+                           int64_t scan_width, int64_t scan_height, FrameGeometry& out)
+{
+    if (!std::isfinite(frame_width_mm) || frame_width_mm <= 0.0 || frame_width_mm > 1e9)
+        return Status::errorf("width_mm = ", frame_width_mm, ": must be in (0, 1e9]");
+    if (input_width <= 0 || input_height <= 0)
+        return Status::errorf("input image is ", input_width, "x", input_height,
+                              ": must have at least one pixel");
+    if (scan_width < 0 || scan_height < 0)
+        return Status::errorf("scan = ", scan_width, "x", scan_height,
+                              ": sizes must be positive");
+    FrameGeometry g;
+    g.width_um       = um_from_mm(frame_width_mm);
+    g.input_width    = input_width;
+    g.input_height   = input_height;
+    g.input_pitch_um = g.width_um / static_cast<double>(input_width);
+    g.height_um      = g.input_pitch_um * static_cast<double>(input_height);
+    g.scan_width     = scan_width ? scan_width : input_width;
+    if (scan_height) {
+        g.scan_height = scan_height;
+    } else if (!scan_width) {
+        g.scan_height = input_height;
+    } else {
+        const double h = std::round(static_cast<double>(g.scan_width) * g.height_um / g.width_um);
+        g.scan_height  = std::max<int64_t>(1, static_cast<int64_t>(h));
+    }
+    constexpr int64_t kMaxSide = int64_t(1) << 40;
+    if (g.scan_width > kMaxSide || g.scan_height > kMaxSide)
+        return Status::errorf("scan = ", g.scan_width, "x", g.scan_height,
+                              ": each side must be at most 2^40");
+    g.scan_pitch_x_um = g.width_um / static_cast<double>(g.scan_width);
+    g.scan_pitch_y_um = g.height_um / static_cast<double>(g.scan_height);
+    out               = g;
+    return {};
+}
+
+PopulationGrains::PopulationGrains(const Population& pop, uint64_t seed, uint32_t layer_index,
+                                   uint32_t population_index)
+{
+    const double s   = pop.diameter_log_sigma;
+    m_log_sigma      = s;
+    m_log_median_um  = std::log(pop.diameter_um) - 0.5 * s * s;
+    m_mean_area_um2  = M_PI / 4.0 * pop.diameter_um * pop.diameter_um * std::exp(s * s);
+    m_key            = hash_ids(seed, layer_index, population_index);
+    const double lam = pop.grains_per_um2;
+
+    const auto radius_at = [&](double z) { return 0.5 * std::exp(m_log_median_um + s * z); };
+    const auto add_bin   = [&](double z_lo, double z_hi, double probability) {
+        Bin bin;
+        bin.z_lo           = z_lo;
+        bin.z_hi           = z_hi;
+        bin.grains_per_um2 = lam * probability;
+        bin.max_radius_um  = radius_at(z_hi);
+        bin.cell_um        = std::sqrt(kGrainsPerCell / bin.grains_per_um2);
+        m_bins.push_back(bin);
+    };
+
+    // Bins are only needed where diameters differ enough to matter for the
+    // search margin; a narrow distribution is a single bin.
+    const double inf = std::numeric_limits<double>::infinity();
+    if (s * (kTruncationZ - kFirstBinTopZ) < std::log(2.0)) {
+        add_bin(-inf, kTruncationZ, 1.0 - normal_upper_tail(kTruncationZ));
+        return;
+    }
+    add_bin(-inf, kFirstBinTopZ, normal_cdf(kFirstBinTopZ));
+    const double dz = std::log(2.0) / s;
+    for (double z_lo = kFirstBinTopZ; z_lo < kTruncationZ; z_lo += dz) {
+        const double z_hi = std::min(z_lo + dz, kTruncationZ);
+        add_bin(z_lo, z_hi, normal_upper_tail(z_lo) - normal_upper_tail(z_hi));
+    }
+}
+
+double PopulationGrains::max_radius_um() const
+{
+    double r = 0.0;
+    for (const Bin& b : m_bins)
+        r = std::max(r, b.max_radius_um);
+    return r;
+}
+
+void PopulationGrains::cell_grains(size_t bin_index, int64_t cx, int64_t cy,
+                                   std::vector<Grain>& out) const
+{
+    const Bin& bin         = m_bins[bin_index];
+    const uint64_t cell_id = hash_ids(m_key, bin_index, static_cast<uint64_t>(cx),
+                                      static_cast<uint64_t>(cy));
+    Rng rng(cell_id, Stage::cell);
+    const uint64_t count = sample_poisson(bin.grains_per_um2 * bin.cell_um * bin.cell_um, rng);
+    for (uint64_t i = 0; i < count; ++i) {
+        Grain g;
+        g.x_um = (static_cast<double>(cx) + rng.uniform()) * bin.cell_um;
+        g.y_um = (static_cast<double>(cy) + rng.uniform()) * bin.cell_um;
+        const double z
+            = m_log_sigma > 0.0 ? sample_truncated_normal(bin.z_lo, bin.z_hi, rng.uniform()) : 0.0;
+        g.radius_um = 0.5 * std::exp(m_log_median_um + m_log_sigma * z);
+        g.id        = hash_combine(cell_id, i);
+        out.push_back(g);
+    }
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,49 @@
+// filmgrain: MODEL.md section 3, latent-image kinetics: the per-grain
+// continuous-time Markov chain of free electrons and silver centres.
+#pragma once
+
+#include <cstdint>
+
+#include "rng.h"
+
+namespace filmgrain {
+
+/// Rate constants of one grain, already scaled by its area (MODEL.md 3),
+/// per second. All finite and >= 0.
+struct KineticsRates {
+    double k_pair_per_s = 0.0;  ///< e -= 2, n2 += 1 at k_pair e (e - 1) / 2
+    double k_join_per_s = 0.0;  ///< e -= 1, a centre grows, at k_join e n
+    double k_loss_per_s = 0.0;  ///< e -= 1 at k_loss e
+};
+
+/// Final stable centres after the chain has run out of free electrons.
+struct LatentImage {
+    uint64_t n2 = 0;  ///< centres of two silver atoms
+    uint64_t n3 = 0;  ///< centres of three
+    uint64_t n4 = 0;  ///< centres of four or more: what development sees
+    bool operator==(const LatentImage& o) const
+    {
+        return n2 == o.n2 && n3 == o.n3 && n4 == o.n4;
+    }
+};
+
+/// Rate scale of a grain of area a: (a / a_mean)^(-rate_area_exponent).
+double rate_scale_for_area(double area_um2, double mean_area_um2, double rate_area_exponent);
+
+/// The exact engine's kinetics (MODEL.md 3): `absorbed_photons` arrivals at
+/// i.i.d. uniform times on [0, shutter_s] (generated as sequential order
+/// statistics, no sort, no storage), interleaved event by event with the
+/// competing exponential processes of the table in MODEL.md 3 (Gillespie's
+/// direct method), then run on after the shutter until no free electron is
+/// left or no event can happen any more.
+///
+/// Every event consumes at least one free electron and every photon adds
+/// one, so the loop takes at most 2 * absorbed_photons steps: it cannot
+/// hang. Time is tracked only as the gap to the next arrival, so shutters
+/// from 1e-9 s to 1e6 s keep events correctly ordered. Deterministic given
+/// the stream. `events` (optional) receives the number of chain events.
+LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
+                                  const KineticsRates& rates, Rng& rng,
+                                  uint64_t* events = nullptr);
+
+}  // namespace filmgrain

@@ -1,0 +1,208 @@
+// Tests of the render driver: determinism across threads, tiles and ROIs;
+// input validation; special pixel values.
+#include "filmgrain/render.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "filmgrain/wedge.h"
+
+namespace filmgrain {
+namespace {
+
+struct Scene {
+    Stock stock;
+    SceneSettings scene;
+    std::vector<float> pixels;
+    ImageView view;
+};
+
+/// A small RGB gradient on a 1.2 mm frame with the colour preset.
+Scene small_scene()
+{
+    Scene s;
+    EXPECT_TRUE(load_stock("color-negative", s.stock));
+    s.scene.frame_width_mm = 1.2;
+    const int w = 48, h = 32;
+    s.pixels.resize(w * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                s.pixels[(y * w + x) * 3 + c]
+                    = static_cast<float>(0.18 * std::exp2((x - 24) / 4.0 + (c - 1) * 0.5));
+    s.view = ImageView { s.pixels.data(), w, h, 3 };
+    return s;
+}
+
+std::vector<float> render(const Scene& s, RenderSettings settings, RenderStats* stats = nullptr)
+{
+    ScanGeometry scan;
+    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, settings, scan));
+    const Roi roi = settings.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : settings.roi;
+    std::vector<float> out(static_cast<size_t>(roi.npixels()) * s.stock.layers.size(), -1.0f);
+    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), stats);
+    EXPECT_TRUE(st) << st.message();
+    return out;
+}
+
+bool bit_identical(const std::vector<float>& a, const std::vector<float>& b)
+{
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(Render, BitIdenticalForThreadsAndTiles)
+{
+    const Scene s = small_scene();
+    RenderSettings one;
+    one.nthreads     = 1;
+    one.tile_size_px = 64;
+    RenderSettings two = one;
+    two.nthreads       = 2;
+    two.tile_size_px   = 7;
+    RenderStats sa, sb;
+    const auto a = render(s, one, &sa);
+    const auto b = render(s, two, &sb);
+    EXPECT_TRUE(bit_identical(a, b));
+    ASSERT_EQ(sa.layers.size(), 3u);
+    for (size_t l = 0; l < 3; ++l) {
+        EXPECT_EQ(sa.layers[l].grains, sb.layers[l].grains);
+        EXPECT_EQ(sa.layers[l].developed, sb.layers[l].developed);
+        EXPECT_EQ(sa.layers[l].absorbed_photons, sb.layers[l].absorbed_photons);
+        EXPECT_EQ(sa.layers[l].mean_density, sb.layers[l].mean_density);
+        EXPECT_GT(sa.layers[l].grains, 0u);
+        EXPECT_GT(sa.layers[l].developed, 0u);
+    }
+    for (float v : a)
+        EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(Render, RoiIsACropOfTheFullRender)
+{
+    const Scene s = small_scene();
+    RenderSettings full;
+    full.tile_size_px = 16;
+    const auto all = render(s, full);
+    RenderSettings part = full;
+    part.roi            = Roi { 13, 5, 40, 22 };
+    part.tile_size_px   = 5;
+    const auto crop     = render(s, part);
+    const size_t nl = 3, w = 48;
+    for (int64_t y = part.roi.y_begin; y < part.roi.y_end; ++y)
+        for (int64_t x = part.roi.x_begin; x < part.roi.x_end; ++x)
+            for (size_t l = 0; l < nl; ++l) {
+                const float a = all[(y * w + x) * nl + l];
+                const float b = crop[((y - 5) * part.roi.width() + (x - 13)) * nl + l];
+                ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << x << "," << y << " layer " << l;
+            }
+}
+
+TEST(Render, AnotherSeedGivesAnotherImage)
+{
+    Scene s = small_scene();
+    const auto a = render(s, {});
+    s.scene.seed = 1;
+    const auto b = render(s, {});
+    size_t differ = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+        differ += a[i] != b[i];
+    EXPECT_GT(differ, a.size() / 2);
+}
+
+TEST(Render, ScanResolutionIsIndependentOfInputResolution)
+{
+    const Scene s = small_scene();
+    RenderSettings settings;
+    settings.scan_width = 96;
+    const auto out      = render(s, settings);
+    EXPECT_EQ(out.size(), 96u * 64u * 3u);
+}
+
+TEST(Render, NonFiniteAndNegativePixelsAreZeroExposureAndCounted)
+{
+    Scene s = small_scene();
+    s.pixels[0] = std::numeric_limits<float>::quiet_NaN();
+    s.pixels[4] = std::numeric_limits<float>::infinity();
+    s.pixels[9] = -1.0f;
+    RenderStats stats;
+    const auto out = render(s, {}, &stats);
+    EXPECT_EQ(stats.input.nonfinite_pixels, 2u);
+    EXPECT_EQ(stats.input.negative_pixels, 1u);
+    EXPECT_EQ(stats.input.pixels_read, 48u * 32u);
+    for (float v : out)
+        EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(Render, ZeroExposureDevelopsFogOnly)
+{
+    // A black frame: only fog develops, so the developed fraction is f.
+    Scene s = small_scene();
+    std::fill(s.pixels.begin(), s.pixels.end(), 0.0f);
+    RenderStats stats;
+    render(s, {}, &stats);
+    const double f = 1 - std::exp(-s.stock.development_time_s / s.stock.fog_tau_s);
+    for (const auto& l : stats.layers) {
+        EXPECT_EQ(l.absorbed_photons, 0u);
+        EXPECT_EQ(l.kinetics_events, 0u);
+        // Binomial(grains, f): 5 sigma.
+        const double n = static_cast<double>(l.grains);
+        EXPECT_NEAR(l.developed / n, f, 5 * std::sqrt(f * (1 - f) / n));
+    }
+}
+
+TEST(Render, RejectsBadRequests)
+{
+    const Scene s = small_scene();
+    std::vector<float> out(48 * 32 * 3);
+    RenderSettings settings;
+    ImageView two_channels = s.view;
+    two_channels.channels  = 2;
+    Status st = render_negative(s.stock, s.scene, two_channels, settings, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("2 channels"), std::string::npos) << st.message();
+    settings.roi = Roi { 40, 0, 60, 10 };
+    st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("outside"), std::string::npos) << st.message();
+    SceneSettings bad = s.scene;
+    bad.shutter_s     = -1;
+    st = render_negative(s.stock, bad, s.view, {}, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("shutter"), std::string::npos) << st.message();
+    Stock bad_stock                              = s.stock;
+    bad_stock.layers[0].populations[0].diameter_um = -3;
+    st = render_negative(bad_stock, s.scene, s.view, {}, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("diameter_um"), std::string::npos) << st.message();
+}
+
+TEST(Render, ProgressCanCancel)
+{
+    const Scene s = small_scene();
+    RenderSettings settings;
+    settings.tile_size_px = 4;
+    settings.nthreads     = 1;
+    settings.progress     = [](double) { return false; };
+    std::vector<float> out(48 * 32 * 3);
+    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
+    // Either it finished before the first report or it was cancelled.
+    if (!st) {
+        EXPECT_NE(st.message().find("cancelled"), std::string::npos);
+    }
+}
+
+TEST(Wedge, StepsAreExposureOffsets)
+{
+    WedgeSpec spec;
+    const auto px = make_step_wedge(spec);
+    ASSERT_EQ(px.size(), static_cast<size_t>(spec.width_px() * spec.height_px));
+    EXPECT_FLOAT_EQ(px[0], static_cast<float>(0.18 * std::exp2(spec.first_stop)));
+    const int64_t last = spec.width_px() - 1;
+    EXPECT_FLOAT_EQ(px[last], static_cast<float>(0.18 * std::exp2(spec.step_stops(spec.steps - 1))));
+}
+
+}  // namespace
+}  // namespace filmgrain

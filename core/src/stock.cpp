@@ -1,0 +1,333 @@
+// Stock files (MODEL.md section 6): parsing, validation, serialisation.
+//
+// One table per struct lists every key with its member, range and unit;
+// parsing, validation and serialisation all walk that table, so a key
+// cannot be read under one name and written under another.
+#include "filmgrain/stock.h"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "presets_embedded.h"
+
+namespace filmgrain {
+
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+/// A numeric key of a struct with its allowed range.
+template<typename T> struct NumberField {
+    const char* key;
+    double T::*member;
+    double lo;
+    double hi;
+    bool lo_open;  ///< lo itself is not allowed
+};
+
+const NumberField<Population> kPopulationFields[] = {
+    { "grains_per_um2", &Population::grains_per_um2, 0.0, 100.0, true },
+    { "diameter_um", &Population::diameter_um, 0.01, 1000.0, false },
+    { "diameter_log_sigma", &Population::diameter_log_sigma, 0.0, 1.5, false },
+    { "quantum_efficiency", &Population::quantum_efficiency, 0.0, 1.0, false },
+    { "k_pair_per_s", &Population::k_pair_per_s, 0.0, 1e15, false },
+    { "k_join_per_s", &Population::k_join_per_s, 0.0, 1e15, false },
+    { "k_loss_per_s", &Population::k_loss_per_s, 0.0, 1e15, false },
+    { "rate_area_exponent", &Population::rate_area_exponent, -4.0, 4.0, false },
+};
+
+const NumberField<Stock> kStockFields[] = {
+    { "exposure_at_grey_lxs", &Stock::exposure_at_grey_lxs, 0.0, 1e6, true },
+    { "development_time_s", &Stock::development_time_s, 0.0, 1e7, false },
+    { "development_tau_s", &Stock::development_tau_s, 0.0, 1e12, true },
+    { "fog_tau_s", &Stock::fog_tau_s, 0.0, 1e30, true },
+    { "base_density", &Stock::base_density, 0.0, 10.0, false },
+    { "max_density", &Stock::max_density, 0.0, 20.0, true },
+};
+
+constexpr size_t kMaxLayers      = 16;
+constexpr size_t kMaxPopulations = 16;
+
+std::string format_number(double v)
+{
+    std::ostringstream out;
+    out.precision(17);
+    out << v;
+    return out.str();
+}
+
+template<typename T>
+Status check_range(const NumberField<T>& f, double v, const std::string& path)
+{
+    const bool ok = std::isfinite(v) && (f.lo_open ? v > f.lo : v >= f.lo) && v <= f.hi;
+    if (ok)
+        return {};
+    return Status::errorf(path, f.key, " = ", format_number(v), ": must be in ",
+                          f.lo_open ? "(" : "[", format_number(f.lo), ", ",
+                          format_number(f.hi), "]");
+}
+
+std::string type_name(const Json& j)
+{
+    return j.type_name();
+}
+
+Status expect_object(const Json& j, const std::string& path)
+{
+    if (!j.is_object())
+        return Status::errorf(path.empty() ? "the stock" : path,
+                              " must be a JSON object, not ", type_name(j));
+    return {};
+}
+
+/// Reads the numeric keys of `fields` from `j` into `out`, rejecting keys
+/// that are neither numeric fields nor listed in `other_keys`.
+template<typename T, size_t N>
+Status read_numbers(const Json& j, const NumberField<T> (&fields)[N],
+                    const std::set<std::string>& other_keys,
+                    const std::string& path, T& out)
+{
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        const std::string& key = it.key();
+        const NumberField<T>* field = nullptr;
+        for (const auto& f : fields)
+            if (key == f.key)
+                field = &f;
+        if (!field) {
+            if (other_keys.count(key))
+                continue;
+            std::string allowed;
+            for (const auto& f : fields)
+                allowed += std::string(allowed.empty() ? "" : ", ") + f.key;
+            for (const auto& k : other_keys)
+                allowed += ", " + k;
+            return Status::errorf("unknown key '", path, key, "'; allowed keys here: ",
+                                  allowed);
+        }
+        if (!it->is_number())
+            return Status::errorf(path, key, " must be a number, not ",
+                                  type_name(*it), " (", it->dump(), ")");
+        out.*(field->member) = it->template get<double>();
+    }
+    return {};
+}
+
+Status read_string(const Json& j, const char* key, const std::string& path, std::string& out)
+{
+    auto it = j.find(key);
+    if (it == j.end())
+        return {};
+    if (!it->is_string())
+        return Status::errorf(path, key, " must be a string, not ", type_name(*it));
+    out = it->get<std::string>();
+    return {};
+}
+
+Status parse_population(const Json& j, const std::string& path, Population& out)
+{
+    if (Status s = expect_object(j, path); !s)
+        return s;
+    return read_numbers(j, kPopulationFields, {}, path + ".", out);
+}
+
+Status parse_layer(const Json& j, const std::string& path, Layer& out)
+{
+    if (Status s = expect_object(j, path); !s)
+        return s;
+    const std::string prefix = path + ".";
+    for (auto it = j.begin(); it != j.end(); ++it) {
+        const std::string& key = it.key();
+        if (key == "name") {
+            if (Status s = read_string(j, "name", prefix, out.name); !s)
+                return s;
+        } else if (key == "sensitivity") {
+            if (!it->is_array() || it->size() != 3)
+                return Status::errorf(prefix, "sensitivity must be an array of 3 numbers "
+                                      "(weights on scene-linear R, G, B), not ", it->dump());
+            for (size_t c = 0; c < 3; ++c) {
+                if (!(*it)[c].is_number())
+                    return Status::errorf(prefix, "sensitivity[", c, "] must be a number, not ",
+                                          type_name((*it)[c]));
+                out.sensitivity[c] = (*it)[c].get<double>();
+            }
+        } else if (key == "populations") {
+            if (!it->is_array())
+                return Status::errorf(prefix, "populations must be an array of objects, not ",
+                                      type_name(*it));
+            out.populations.clear();
+            for (size_t p = 0; p < it->size(); ++p) {
+                Population pop;
+                if (Status s = parse_population((*it)[p], prefix + "populations["
+                                                + std::to_string(p) + "]", pop);
+                    !s)
+                    return s;
+                out.populations.push_back(pop);
+            }
+        } else {
+            return Status::errorf("unknown key '", prefix, key,
+                                  "'; allowed keys here: name, sensitivity, populations");
+        }
+    }
+    return {};
+}
+
+}  // namespace
+
+Status Stock::validate() const
+{
+    for (const auto& f : kStockFields)
+        if (Status s = check_range(f, this->*(f.member), ""); !s)
+            return s;
+    if (layers.empty() || layers.size() > kMaxLayers)
+        return Status::errorf("layers has ", layers.size(), " entries: must have 1 to ",
+                              kMaxLayers);
+    std::set<std::string> names;
+    for (size_t i = 0; i < layers.size(); ++i) {
+        const Layer& layer       = layers[i];
+        const std::string prefix = "layers[" + std::to_string(i) + "].";
+        if (layer.name.empty())
+            return Status::errorf(prefix, "name is empty: must name the output channel");
+        for (char c : layer.name)
+            if (static_cast<unsigned char>(c) < 0x20 || c == ':' || c == ',')
+                return Status::errorf(prefix, "name '", layer.name,
+                                      "' contains a control character, ':' or ','");
+        if (!names.insert(layer.name).second)
+            return Status::errorf(prefix, "name '", layer.name,
+                                  "' repeats an earlier layer's name: channel names must be unique");
+        double sum = 0.0;
+        for (size_t c = 0; c < 3; ++c) {
+            const double w = layer.sensitivity[c];
+            if (!std::isfinite(w) || w < 0.0 || w > 100.0)
+                return Status::errorf(prefix, "sensitivity[", c, "] = ", format_number(w),
+                                      ": must be in [0, 100]");
+            sum += w;
+        }
+        if (sum <= 0.0)
+            return Status::errorf(prefix, "sensitivity is all zero: the layer could never "
+                                  "be exposed");
+        if (layer.populations.empty() || layer.populations.size() > kMaxPopulations)
+            return Status::errorf(prefix, "populations has ", layer.populations.size(),
+                                  " entries: must have 1 to ", kMaxPopulations);
+        for (size_t p = 0; p < layer.populations.size(); ++p) {
+            const std::string pprefix = prefix + "populations[" + std::to_string(p) + "].";
+            for (const auto& f : kPopulationFields)
+                if (Status s = check_range(f, layer.populations[p].*(f.member), pprefix); !s)
+                    return s;
+        }
+    }
+    return {};
+}
+
+Status parse_stock_json(const std::string& text, const std::string& origin, Stock& out)
+{
+    const std::string where = origin.empty() ? std::string("stock") : origin;
+    Json j;
+    try {
+        j = Json::parse(text);
+    } catch (const Json::parse_error& e) {
+        return Status::errorf(where, ": not valid JSON: ", e.what());
+    } catch (const std::exception& e) {
+        return Status::errorf(where, ": not valid JSON: ", e.what());
+    }
+    if (Status s = expect_object(j, ""); !s)
+        return Status::errorf(where, ": ", s.message());
+
+    Stock stock;
+    const std::set<std::string> other_keys = { "name", "description", "layers" };
+    Status s = read_numbers(j, kStockFields, other_keys, "", stock);
+    if (s)
+        s = read_string(j, "name", "", stock.name);
+    if (s)
+        s = read_string(j, "description", "", stock.description);
+    if (s) {
+        auto it = j.find("layers");
+        if (it != j.end()) {
+            if (!it->is_array()) {
+                s = Status::errorf("layers must be an array of objects, not ", type_name(*it));
+            } else {
+                stock.layers.clear();
+                for (size_t i = 0; i < it->size() && s; ++i) {
+                    Layer layer;
+                    s = parse_layer((*it)[i], "layers[" + std::to_string(i) + "]", layer);
+                    stock.layers.push_back(layer);
+                }
+            }
+        }
+    }
+    if (s)
+        s = stock.validate();
+    if (!s)
+        return Status::errorf(where, ": ", s.message());
+    out = std::move(stock);
+    return {};
+}
+
+std::string stock_to_json(const Stock& stock, int indent)
+{
+    Json j;
+    j["name"]        = stock.name;
+    j["description"] = stock.description;
+    for (const auto& f : kStockFields)
+        j[f.key] = stock.*(f.member);
+    j["layers"] = Json::array();
+    for (const Layer& layer : stock.layers) {
+        Json jl;
+        jl["name"]        = layer.name;
+        jl["sensitivity"] = layer.sensitivity;
+        jl["populations"] = Json::array();
+        for (const Population& pop : layer.populations) {
+            Json jp;
+            for (const auto& f : kPopulationFields)
+                jp[f.key] = pop.*(f.member);
+            jl["populations"].push_back(jp);
+        }
+        j["layers"].push_back(jl);
+    }
+    return j.dump(indent);
+}
+
+std::vector<std::string> preset_names()
+{
+    std::vector<std::string> names;
+    for (const auto& p : embedded_presets())
+        names.push_back(p.name);
+    return names;
+}
+
+const char* default_preset_name() { return "color-negative"; }
+
+std::string preset_json(const std::string& name)
+{
+    for (const auto& p : embedded_presets())
+        if (name == p.name)
+            return p.json;
+    return {};
+}
+
+Status load_stock(const std::string& name_or_path, Stock& out)
+{
+    const std::string preset = preset_json(name_or_path);
+    if (!preset.empty())
+        return parse_stock_json(preset, "preset " + name_or_path, out);
+    std::ifstream in(name_or_path, std::ios::binary);
+    if (!in) {
+        std::string names;
+        for (const auto& n : preset_names())
+            names += (names.empty() ? "" : ", ") + n;
+        return Status::errorf("stock '", name_or_path,
+                              "' is neither a built-in preset (", names,
+                              ") nor a readable file");
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad())
+        return Status::errorf("stock file '", name_or_path, "': read error");
+    return parse_stock_json(text.str(), name_or_path, out);
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,121 @@
+// filmgrain: per-grain film simulation.
+// OpenColorIO input conversion: pixels in any colour space a config knows ->
+// the config's scene_linear role, which is what the simulator consumes.
+//
+// No OpenColorIO type appears here (pimpl): including this header needs only
+// the C++ standard library and filmgrain/status.h. No exception leaves these
+// functions; every failure is returned as a Status whose message names what
+// failed (the colour space, the config file and where it came from).
+//
+// Config resolution, shared by InputConverter::create and list_colorspaces:
+//   1. config_path not empty: that file (like oiiotool --colorconfig);
+//   2. else $OCIO, when set and not empty;
+//   3. else the embedded minimal config (embedded_config_text()): reference
+//      lin_rec709 (scene-linear Rec.709, D65), ACEScg, ACES2065-1, sRGB, raw.
+#pragma once
+
+#include <filmgrain/status.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace filmgrain::ocio {
+
+/// Which config was used and from where.
+/// Thread safety: a value type; distinct objects are independent.
+struct ConfigInfo {
+    /// "file" (explicit config_path), "$OCIO" (from the environment) or
+    /// "embedded" (the built-in minimal config).
+    std::string source;
+    /// The config file path as given (explicitly or in $OCIO); empty for the
+    /// embedded config.
+    std::string path;
+};
+
+/// Converts pixels from a named colour space to the config's scene_linear
+/// role. The OCIO processor is built once in create(); apply_*() then run it
+/// as a plain loop.
+/// Thread safety: all const member functions may be called concurrently from
+/// any number of threads on distinct (non-overlapping) buffers; the intended
+/// use is one converter per image, apply per tile. Not copyable.
+/// Determinism: the result for a pixel depends only on that pixel's value, not
+/// on how the image is split into calls or threads.
+class InputConverter {
+public:
+    /// Loads the config (see the resolution rules at the top of this header),
+    /// resolves src_colorspace and builds the CPU processor
+    /// src_colorspace -> scene_linear.
+    /// config_path: explicit config file; empty means $OCIO when set and not
+    ///   empty, else the embedded minimal config.
+    /// src_colorspace: any colour space name, alias or role the config knows
+    ///   (e.g. "sRGB", "ACEScg", "scene_linear"); OCIO matches names
+    ///   case-insensitively.
+    /// out: set to the new converter on success, reset on failure.
+    /// Returns an error naming the config (and "$OCIO" when it came from
+    /// there) if it cannot be loaded, has no scene_linear role, or does not
+    /// know src_colorspace (the message then lists the known names).
+    /// Thread safety: may be called concurrently; reads $OCIO with getenv,
+    /// so must not race with setenv/unsetenv.
+    static Status create(const std::string& config_path,
+                         const std::string& src_colorspace,
+                         std::unique_ptr<InputConverter>& out);
+
+    ~InputConverter();
+    InputConverter(const InputConverter&)            = delete;
+    InputConverter& operator=(const InputConverter&) = delete;
+
+    /// Converts packed float RGB in place: npixels * 3 floats, no alpha.
+    /// Does nothing when rgb is null, npixels is 0 or is_noop().
+    /// NaN and Inf are passed to OCIO as they are (no crash; what comes out
+    /// depends on the transform: a curve such as sRGB keeps NaN/+Inf/-Inf in
+    /// their channel, a matrix such as ACEScg -> Rec.709 spreads a non-finite
+    /// value to all three channels of that pixel). Pixels are independent:
+    /// a non-finite pixel never affects its neighbours.
+    /// Thread safety: const; safe concurrently on non-overlapping buffers.
+    void apply_rgb(float* rgb, size_t npixels) const;
+
+    /// Converts the first three channels of packed float pixels with
+    /// nchannels (>= 3) channels each; alpha and any further channels are
+    /// never read or written. Does nothing when pixels is null, npixels is 0,
+    /// nchannels < 3 or is_noop(). Same NaN/Inf behaviour as apply_rgb.
+    /// Thread safety: const; safe concurrently on non-overlapping buffers.
+    void apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const;
+
+    /// True when the conversion is an identity, e.g. scene_linear ->
+    /// scene_linear, an alias of the scene_linear space, or a data space such
+    /// as "raw" (OCIO never converts data). Callers may skip the pass.
+    bool is_noop() const;
+
+    /// The config this converter was built from.
+    const ConfigInfo& config() const;
+
+    /// The source colour space exactly as the caller gave it.
+    const std::string& source_colorspace() const;
+
+    /// The name of the colour space the config's scene_linear role resolves to
+    /// (e.g. "lin_rec709" in the embedded config).
+    const std::string& scene_linear_colorspace() const;
+
+private:
+    struct Impl;
+    explicit InputConverter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// The embedded minimal config (OCIO v2 YAML), exactly as in
+/// ocio/src/filmgrain_minimal.ocio at build time; for --help, debugging and
+/// tests. Thread safety: returns a reference to an immutable static string.
+const std::string& embedded_config_text();
+
+/// Names of all colour spaces (active and inactive, in config order) followed
+/// by all role names of the config that InputConverter::create would load for
+/// config_path (same resolution rules); aliases are accepted by create but
+/// not listed. For error messages and --help.
+/// names: replaced on success, cleared on failure.
+/// Thread safety: as InputConverter::create.
+Status list_colorspaces(const std::string& config_path,
+                        std::vector<std::string>& names);
+
+}  // namespace filmgrain::ocio
