@@ -1,0 +1,124 @@
+// filmgrain: per-grain film simulation.
+// The simulator as an OpenImageIO ImageBufAlgo-style operator.
+//
+// Conventions shared by every function in this header (as in OIIO's
+// imagebufalgo.h):
+// - Pairs. `bool op(ImageBuf& dst, const ImageBuf& src, ...)` writes dst and
+//   returns true on success; `ImageBuf op(const ImageBuf& src, ...)` is a
+//   wrapper around it that returns the result (with the error, if any, set
+//   on the returned image: check `result.has_error()`).
+// - Errors: never an exception, never an abort. On failure the message is
+//   stored on dst (read it with dst.geterror()) and the function returns
+//   false; the message names the field, its value and the rule it broke.
+// - ROI: in *scan* pixels (the output grid over the whole film frame), not
+//   in src pixels. The default (undefined) ROI means the whole scan. The
+//   ROI's channel and z ranges are ignored: every layer is always written.
+// - Threads: nthreads = 0 means OIIO's global default (the "threads"
+//   attribute, all hardware threads unless changed); nthreads > 0 uses that
+//   many worker threads.
+// - Determinism: for a given (src pixels, stock, scene, scan size) every
+//   output pixel is bit-identical whatever the thread count, tile size or
+//   ROI that contains it (the core's guarantee, see filmgrain/render.h).
+// - Aliasing: dst may be the same ImageBuf as src (src is read completely
+//   before dst is reallocated).
+// - Thread safety: the functions are reentrant; distinct calls may run
+//   concurrently on distinct dst images.
+//
+// The operator holds no physics: it packs src into a float buffer, calls
+// filmgrain::render_negative (core) and stores the result and its metadata
+// in dst.
+#pragma once
+
+// OIIO's type-dispatch macros use `half` without including it.
+#include <OpenImageIO/half.h>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <cstdint>
+
+#include "filmgrain/render.h"
+#include "filmgrain/stock.h"
+
+namespace filmgrain {
+
+/// Everything the operator needs besides the images: the film, the shot and
+/// the scan. A plain value type; copy it freely.
+struct FilmgrainOptions {
+    /// The film stock. Type Stock; default: the built-in default preset
+    /// (`default_preset_name()`, the three-layer colour negative), loaded by
+    /// the constructor. Should the embedded preset ever fail to parse (a
+    /// build defect the core's tests catch), `stock` has no layers and its
+    /// `name` holds the parse error, so every render fails with that message
+    /// instead of silently using another film.
+    Stock stock;
+
+    /// The shot. Type SceneSettings, with its documented defaults:
+    /// exposure_stops (double, stops, default 0, [-64, 64]); shutter_s
+    /// (double, seconds, default 1/48, (0, 1e7]); frame_width_mm (double,
+    /// millimetres, default 24.89 = Super 35, (0, 1e9]); seed (uint64_t,
+    /// default 0: selects the grain pattern).
+    SceneSettings scene;
+
+    /// The simulation engine. Type Engine; default RenderSettings' default
+    /// (Engine::exact, the reference).
+    Engine engine = RenderSettings().engine;
+
+    /// Scan width in pixels over the whole frame. int64_t; default 0 =
+    /// src's width. Must fit an OIIO image (at most 2^31 - 1).
+    int64_t scan_width = 0;
+
+    /// Scan height in pixels. int64_t; default 0 = src's height when
+    /// scan_width is 0, else the frame's aspect at scan_width (rounded).
+    int64_t scan_height = 0;
+
+    /// Side of the square work tiles, scan pixels. int; default
+    /// RenderSettings' default (64); range [1, 4096]. Speed only: never
+    /// changes the output.
+    int tile_size_px = RenderSettings().tile_size_px;
+
+    /// Optional progress report in [0, 1], called from the calling thread
+    /// about ten times a second; return false to cancel (the operator then
+    /// fails with "render cancelled"). Default: none.
+    ProgressCallback progress;
+
+    /// Default options: the default preset and the documented defaults.
+    FilmgrainOptions();
+};
+
+namespace IBA {
+
+/// Simulates exposing, developing and scanning a film negative of `src`.
+///
+/// src: scene-linear pixels; 1 channel (grey, read as R = G = B) or at least
+///   3 channels (R, G, B first; alpha and any further channels are ignored).
+///   2-channel images are an error. Any pixel type (converted to float). The
+///   film frame covers src's data window: opts.scene.frame_width_mm across
+///   src's width, square src pixels. NaN and Inf channels expose nothing
+///   and are counted in stats->input.nonfinite_pixels.
+/// dst: (re)allocated as float with one channel per stock layer, named
+///   after the layer (stock order): negative density, -log10(transmittance)
+///   plus the stock's base density. Its full (display) window is the whole
+///   scan, its data window the ROI.
+///   Metadata on dst's spec (strings unless noted): filmgrain:quantity,
+///   filmgrain:stock (the full stock as JSON), filmgrain:stock_name,
+///   filmgrain:seed (decimal: 64-bit), filmgrain:exposure_stops (float),
+///   filmgrain:shutter_s (float), filmgrain:frame_width_mm (float),
+///   filmgrain:engine, filmgrain:version.
+/// roi: scan pixels to render (default: the whole scan). Must lie inside
+///   the scan.
+/// stats: if not null, receives the render's statistics (grain counts per
+///   layer, special input pixels, simulation time).
+bool filmgrain(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
+               OIIO::ROI roi = {}, int nthreads = 0, RenderStats* stats = nullptr);
+
+/// As above, returning the result; on failure the result has the error set.
+OIIO::ImageBuf filmgrain(const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
+                         OIIO::ROI roi = {}, int nthreads = 0);
+
+}  // namespace IBA
+
+/// Value of the filmgrain:quantity attribute: what the pixels mean.
+inline constexpr const char* kFilmgrainQuantity
+    = "negative density: -log10(transmittance) + base density";
+
+}  // namespace filmgrain

@@ -1,0 +1,472 @@
+// filmgrain CLI: command-line parsing and help (cli_args.h).
+//
+// One table declares every option with its value names, help and handler;
+// OIIO::ArgParse is configured from it and --help is printed from it, so
+// an option cannot be parsed without being documented.
+#include "cli_args.h"
+
+#include <OpenImageIO/argparse.h>
+
+#include <charconv>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <functional>
+#include <sstream>
+#include <system_error>
+
+#include "filmgrain/ocio.h"
+#include "filmgrain/version.h"
+#include "filmgrain/wedge.h"
+
+namespace filmgrain::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Handles one occurrence of an option: `flag` is the command-line word as
+/// given (with any :modifiers), `value` its parameter (null for flags).
+/// Returns an error to stop parsing.
+using Handler = std::function<Status(CliArgs&, const std::string& flag, const char* value)>;
+
+struct OptionSpec {
+    const char* flag;  ///< "-o", "--threads"
+    const char* alias;  ///< another spelling ("--quiet" for -q), or null
+    const char* metavar;  ///< value name(s), "" for a flag
+    std::string help;
+    Handler handle;
+    bool takes_modifiers = false;  ///< --filmgrain and -o accept :key=value
+};
+
+/// The option name without its :modifiers.
+std::string base_flag(const std::string& word)
+{
+    return word.substr(0, word.find(':'));
+}
+
+Status once(bool already, const char* flag)
+{
+    if (already)
+        return Status::errorf(flag, " may be given at most once");
+    return {};
+}
+
+Status parse_threads(const char* value, int& out)
+{
+    const char* end = value + std::strlen(value);
+    int n           = 0;
+    const auto r    = std::from_chars(value, end, n, 10);
+    if (r.ec != std::errc() || r.ptr != end || n < 0 || n > 4096)
+        return Status::errorf("--threads ", value,
+                              ": expected a whole number of threads in [0, 4096] (0: all)");
+    out = n;
+    return {};
+}
+
+std::string format_stops(double stops)
+{
+    std::ostringstream out;
+    out << std::showpos << stops;
+    return out.str();
+}
+
+/// --wedge's help, from the WedgeSpec defaults.
+std::string wedge_help()
+{
+    const WedgeSpec w;
+    std::ostringstream out;
+    out << "Render the built-in grey step wedge instead of INPUT: " << w.width_px() << "x"
+        << w.height_px << " scene-linear, " << w.steps << " steps of " << w.stops_per_step
+        << " stop from " << format_stops(w.step_stops(0)) << " to "
+        << format_stops(w.step_stops(w.steps - 1)) << " stops around 0.18";
+    return out.str();
+}
+
+const std::vector<OptionSpec>& option_table()
+{
+    static const std::vector<OptionSpec> table = {
+        { "--wedge", nullptr, "", wedge_help(),
+          [](CliArgs& a, const std::string&, const char*) {
+              Status s = once(a.wedge, "--wedge");
+              a.wedge  = true;
+              return s;
+          } },
+        { "--colorconfig", nullptr, "FILE",
+          "OCIO config for the input conversion (default: $OCIO, else the embedded config)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s      = once(!a.colorconfig.empty(), "--colorconfig");
+              a.colorconfig = v;
+              if (s && a.colorconfig.empty())
+                  s = Status::error("--colorconfig: empty file name");
+              return s;
+          } },
+        { "--iscolorspace", nullptr, "NAME",
+          "Colour space of INPUT (default: the file's oiio:ColorSpace when the config knows "
+          "it, else scene_linear)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s           = once(a.has_iscolorspace, "--iscolorspace");
+              a.has_iscolorspace = true;
+              a.iscolorspace     = v;
+              if (s && a.iscolorspace.empty())
+                  s = Status::error("--iscolorspace: empty colour space name");
+              return s;
+          } },
+        { "--filmgrain", nullptr, "",
+          "Simulate the film: expose, develop and scan a negative (modifiers below)",
+          [](CliArgs& a, const std::string& flag, const char*) {
+              if (Status s = once(a.has_filmgrain, "--filmgrain"); !s)
+                  return s;
+              a.has_filmgrain = true;
+              return parse_filmgrain_modifiers(flag, a.filmgrain);
+          },
+          true },
+        { "-d", nullptr, "half|float",
+          "Output pixel type: half or float (default: float)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              const std::string t = v;
+              if (t == "float")
+                  a.output_type = OutputType::float32;
+              else if (t == "half")
+                  a.output_type = OutputType::half16;
+              else
+                  return Status::errorf("-d ", t, ": unknown output type; expected half or float");
+              return Status();
+          } },
+        { "-o", nullptr, "FILE.exr",
+          "Output OpenEXR file (required to render; written atomically: a temporary file in "
+          "the same directory, renamed when complete). Modifier :compression=NAME",
+          [](CliArgs& a, const std::string& flag, const char* v) {
+              if (Status s = once(!a.output.empty(), "-o"); !s)
+                  return s;
+              a.output = v;
+              if (a.output.empty())
+                  return Status::error("-o: empty file name");
+              return parse_output_modifiers(flag, a.output_modifiers);
+          },
+          true },
+        { "--stats", nullptr, "FILE.json",
+          "Also write render statistics as JSON (timings, grain counts, input pixels)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s     = once(!a.stats_path.empty(), "--stats");
+              a.stats_path = v;
+              if (s && a.stats_path.empty())
+                  s = Status::error("--stats: empty file name");
+              return s;
+          } },
+        { "--preview", nullptr, "FILE.png",
+          "Also write an 8-bit sRGB PNG positive for viewing (see Preview below)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s       = once(!a.preview_path.empty(), "--preview");
+              a.preview_path = v;
+              if (s && a.preview_path.empty())
+                  s = Status::error("--preview: empty file name");
+              return s;
+          } },
+        { "--threads", nullptr, "N",
+          "Worker threads (default: 0 = all hardware threads)",
+          [](CliArgs& a, const std::string&, const char* v) { return parse_threads(v, a.threads); } },
+        { "--progress", nullptr, "",
+          "Show progress on stderr even when it is not a terminal (default: only on a terminal)",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.progress = true;
+              return Status();
+          } },
+        { "-q", "--quiet", "", "Quiet: print nothing but errors",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.quiet = true;
+              return Status();
+          } },
+        { "--list-stocks", nullptr, "", "List the built-in stock presets and exit",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.list_stocks = true;
+              return Status();
+          } },
+        { "--print-stock", nullptr, "NAME|FILE",
+          "Print a stock (preset or file) as complete JSON, every key resolved, and exit",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s      = once(!a.print_stock.empty(), "--print-stock");
+              a.print_stock = v;
+              if (s && a.print_stock.empty())
+                  s = Status::error("--print-stock: empty stock name");
+              return s;
+          } },
+        { "--version", nullptr, "", "Print the version and exit",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.version = true;
+              return Status();
+          } },
+        { "--help", "-h", "", "Print this help and exit",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.help = true;
+              return Status();
+          } },
+    };
+    return table;
+}
+
+Status parse_impl(int argc, const char** argv, CliArgs& out)
+{
+    CliArgs args;
+    Status error;
+    OIIO::ArgParse ap;
+    ap.add_help(false).exit_on_error(false);
+    ap.arg("filename").hidden().action([&](OIIO::cspan<const char*> a) {
+        if (!error)
+            return;
+        if (!args.input.empty())
+            error = Status::errorf("more than one INPUT ('", args.input, "' and '", a[0],
+                                   "'): filmgrain reads one image");
+        else if (a[0][0] == '\0')
+            error = Status::error("empty INPUT file name");
+        else
+            args.input = a[0];
+    });
+    for (const OptionSpec& spec : option_table()) {
+        const OptionSpec* sp = &spec;  // the table is static
+        for (const char* name : { spec.flag, spec.alias }) {
+            if (!name)
+                continue;
+            auto& arg = ap.arg(name).help(spec.help.c_str());
+            if (*spec.metavar)
+                arg.metavar(spec.metavar);
+            arg.action([&args, &error, sp, name](OIIO::cspan<const char*> a) {
+                if (!error)
+                    return;
+                const std::string word = a[0];
+                if (!sp->takes_modifiers && word != base_flag(word)) {
+                    error = Status::errorf(name, " takes no :modifiers (got '", word, "')");
+                    return;
+                }
+                error = sp->handle(args, word, a.size() > 1 ? a[1] : nullptr);
+            });
+        }
+    }
+    if (ap.parse_args(argc, argv) < 0 || ap.has_error()) {
+        std::string msg = ap.geterror();
+        if (msg.empty())
+            msg = "cannot parse the command line";
+        return Status::errorf(msg, " (see filmgrain --help)");
+    }
+    if (!error)
+        return error;
+    out = std::move(args);
+    return {};
+}
+
+std::string lowercase_extension(const std::string& path)
+{
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext)
+        if (c >= 'A' && c <= 'Z')
+            c = static_cast<char>(c - 'A' + 'a');
+    return ext;
+}
+
+/// True when a and b name the same file (existing: same inode; else the
+/// same normalised absolute path).
+bool same_file(const std::string& a, const std::string& b)
+{
+    std::error_code ec;
+    if (fs::equivalent(a, b, ec) && !ec)
+        return true;
+    const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
+    if (ec)
+        return false;
+    const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+    if (ec)
+        return false;
+    return ca == cb;
+}
+
+void append_wrapped(std::ostringstream& out, const std::string& lead, const std::string& text,
+                    size_t width = 78)
+{
+    // Words wrapped after `lead`, continuation lines indented like it.
+    const size_t nl = lead.rfind('\n');
+    const std::string indent(nl == std::string::npos ? lead.size() : lead.size() - nl - 1, ' ');
+    std::string line = lead;
+    std::istringstream words(text);
+    std::string word;
+    bool first = true;
+    while (words >> word) {
+        const size_t line_length = line.size() - (line.rfind('\n') + 1);
+        if (!first && line_length + 1 + word.size() > width) {
+            out << line << "\n";
+            line  = indent + word;
+            first = false;
+            continue;
+        }
+        line += (first ? "" : " ") + word;
+        first = false;
+    }
+    out << line << "\n";
+}
+
+std::string pad(std::string s, size_t width)
+{
+    if (s.size() + 2 > width)
+        return s + "\n" + std::string(width, ' ');
+    s.resize(width, ' ');
+    return s;
+}
+
+}  // namespace
+
+Status parse_command_line(int argc, const char** argv, CliArgs& out)
+{
+    try {
+        return parse_impl(argc, argv, out);
+    } catch (const std::exception& e) {
+        return Status::errorf("cannot parse the command line: ", e.what());
+    }
+}
+
+bool wants_help(int argc, const char** argv)
+{
+    for (int i = 1; i < argc; ++i)
+        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h"))
+            return true;
+    return false;
+}
+
+Status validate_render_args(const CliArgs& a)
+{
+    if (a.input.empty() && !a.wedge)
+        return Status::error("no INPUT image (or --wedge) given (see filmgrain --help)");
+    if (!a.input.empty() && a.wedge)
+        return Status::errorf("both INPUT '", a.input,
+                              "' and --wedge given: render one or the other");
+    if (a.wedge && a.has_iscolorspace)
+        return Status::error("--iscolorspace applies to INPUT; the --wedge is scene-linear");
+    if (!a.has_filmgrain)
+        return Status::error("no --filmgrain command given: nothing to do (--filmgrain alone "
+                             "renders with the defaults)");
+    if (a.output.empty())
+        return Status::error("no output given: -o FILE.exr is required");
+    if (lowercase_extension(a.output) != ".exr")
+        return Status::errorf("output '", a.output,
+                              "' must be an OpenEXR file (.exr): it holds density data, "
+                              "not a picture (use --preview FILE.png for one)");
+    if (!a.preview_path.empty() && lowercase_extension(a.preview_path) != ".png")
+        return Status::errorf("--preview '", a.preview_path, "' must be a .png file");
+
+    struct Named {
+        const char* what;
+        const std::string* path;
+    };
+    const Named paths[] = { { "INPUT", &a.input },
+                            { "-o", &a.output },
+                            { "--stats", &a.stats_path },
+                            { "--preview", &a.preview_path } };
+    for (size_t i = 0; i < 4; ++i)
+        for (size_t j = i + 1; j < 4; ++j)
+            if (!paths[i].path->empty() && !paths[j].path->empty()
+                && same_file(*paths[i].path, *paths[j].path))
+                return Status::errorf(paths[i].what, " and ", paths[j].what,
+                                      " name the same file '", *paths[j].path,
+                                      "': refusing to overwrite it");
+    return {};
+}
+
+std::string help_text()
+{
+    std::ostringstream out;
+    out << "filmgrain " << version_string()
+        << " -- physically based per-grain film simulation\n\n"
+        << "Usage: filmgrain INPUT [--colorconfig FILE] [--iscolorspace NAME]\n"
+        << "                 --filmgrain[:key=value...] [-d half|float] -o OUTPUT.exr\n"
+        << "                 [--stats FILE.json] [--preview FILE.png] [--threads N]\n"
+        << "                 [--progress] [-q]\n"
+        << "       filmgrain --wedge --filmgrain[:key=value...] -o OUTPUT.exr [...]\n"
+        << "       filmgrain --list-stocks | --print-stock NAME|FILE | --version | --help\n\n"
+        << "Options:\n";
+    constexpr size_t kColumn = 28;
+    append_wrapped(out, pad("    INPUT", kColumn),
+                   "Input image, any format OpenImageIO reads (read as float): 1 channel "
+                   "(grey) or >= 3 (R, G, B first; alpha and others ignored)");
+    for (const OptionSpec& spec : option_table()) {
+        std::string names = std::string("    ") + spec.flag;
+        if (spec.alias)
+            names += std::string(", ") + spec.alias;
+        if (*spec.metavar)
+            names += std::string(" ") + spec.metavar;
+        append_wrapped(out, pad(names, kColumn), spec.help);
+    }
+
+    out << "\n--filmgrain modifiers (--filmgrain:key=value:key=value...):\n";
+    for (const ModifierDoc& m : filmgrain_modifier_docs())
+        append_wrapped(out, pad("    :" + m.key + "=" + m.form, kColumn),
+                       m.help + ". Default: " + m.default_text + ".");
+
+    out << "\n-o modifiers:\n";
+    std::string comps;
+    for (const auto& c : exr_compressions())
+        comps += (comps.empty() ? "" : ", ") + c;
+    append_wrapped(out, pad("    :compression=NAME", kColumn),
+                   "OpenEXR compression: " + comps + ". Default: "
+                       + OutputModifiers().compression + ".");
+
+    out << "\nStock presets (--list-stocks describes them):\n";
+    std::string presets;
+    for (const auto& p : preset_names())
+        presets += (presets.empty() ? "" : ", ") + p
+                   + (p == default_preset_name() ? " (default)" : "");
+    append_wrapped(out, "    ", presets);
+    append_wrapped(out, "    ",
+                   "A stock file is JSON of the same shape: filmgrain --print-stock "
+                   + std::string(default_preset_name()) + " > my.json, edit, then "
+                   "--filmgrain:stock=my.json.");
+
+    out << "\nColour:\n";
+    append_wrapped(out, "    ",
+                   "INPUT is converted to the OCIO config's scene_linear role. The config "
+                   "is the first of:");
+    out << "      1. --colorconfig FILE\n"
+        << "      2. $OCIO, when set and not empty\n"
+        << "      3. the embedded minimal config (scene-linear Rec.709 reference, ACEScg,\n"
+        << "         ACES2065-1, sRGB, raw)\n";
+    append_wrapped(out, "    ",
+                   "INPUT's colour space is --iscolorspace NAME; else the file's "
+                   "oiio:ColorSpace attribute (e.g. sRGB for PNG and JPEG, Linear for "
+                   "OpenEXR), which must be known to the config; else scene_linear.");
+    std::vector<std::string> spaces;
+    if (ocio::list_colorspaces("", spaces)) {
+        std::string list;
+        for (const auto& s : spaces)
+            list += (list.empty() ? "" : ", ") + s;
+        append_wrapped(out, "    ", "Colour spaces and roles of the default config now: "
+                                        + list + ".");
+    }
+
+    out << "\nOutput:\n";
+    append_wrapped(out, "    ",
+                   "One channel per stock layer, named after the layer: negative density, "
+                   "-log10(transmittance) + the stock's base density. The full (display) "
+                   "window is the whole scan, the data window the roi. Metadata: "
+                   "filmgrain:quantity, filmgrain:stock (the stock as JSON), "
+                   "filmgrain:stock_name, filmgrain:seed, filmgrain:exposure_stops, "
+                   "filmgrain:shutter_s, filmgrain:frame_width_mm, filmgrain:engine, "
+                   "filmgrain:version.");
+    out << "\nPreview:\n";
+    append_wrapped(out, "    ",
+                   "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the "
+                   "99.9th percentile of the density over all layers (one scale for all "
+                   "channels: no colour shift), encoded as p^(1/2.2) in 8 bits. Layers named "
+                   "R, G and B give an RGB PNG; a single layer (or two) gives grey from the "
+                   "first layer; otherwise the first three layers in stock order are R, G, B.");
+    out << "\nProgress and messages go to stderr; errors read 'filmgrain: error: ...'.\n"
+        << "On any error or interruption no output file (-o, --stats, --preview) is created.\n"
+        << "\nExit status:\n";
+    append_wrapped(out, "    ",
+                   "0 success; " + std::to_string(kExitError)
+                       + " error (usage errors included); " + std::to_string(kExitSignalBase)
+                       + "+N interrupted by signal N (130: SIGINT, 143: SIGTERM).");
+    out << "\nExamples:\n"
+        << "    filmgrain --wedge --filmgrain -o out/wedge.exr --preview out/wedge.png\n"
+        << "    filmgrain photo.png --filmgrain:stock=paper:exposure=1:seed=7 -d half -o "
+           "photo_neg.exr\n";
+    return out.str();
+}
+
+}  // namespace filmgrain::cli

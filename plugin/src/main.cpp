@@ -1,0 +1,492 @@
+// filmgrain: the command-line tool. oiiotool-shaped; see `filmgrain --help`.
+//
+// main() only orders the stages: parse the command line, read the input (or
+// make the wedge), convert it to scene-linear (OCIO), run the operator,
+// write the outputs all-or-nothing. It does no maths of its own.
+#include <OpenImageIO/half.h>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "cli_args.h"
+#include "filmgrain/imagebufalgo_filmgrain.h"
+#include "filmgrain/ocio.h"
+#include "filmgrain/version.h"
+#include "filmgrain/wedge.h"
+#include "output_files.h"
+#include "preview.h"
+#include "stats_json.h"
+
+namespace filmgrain::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock  = std::chrono::steady_clock;
+
+// ---------------------------------------------------------------------------
+// Interruption: SIGINT/SIGTERM/SIGHUP only set a flag. The render polls it
+// through the progress callback (and cancels), the other stages check it
+// between steps; the outputs' temporary files are then removed and nothing
+// is renamed into place.
+
+volatile std::sig_atomic_t g_signal = 0;
+
+extern "C" void on_signal(int sig) { g_signal = sig; }
+
+void install_signal_handlers()
+{
+    struct sigaction sa;
+    std::memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;
+    for (int sig : { SIGINT, SIGTERM, SIGHUP })
+        sigaction(sig, &sa, nullptr);
+}
+
+bool interrupted() { return g_signal != 0; }
+
+double seconds_since(Clock::time_point t)
+{
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+std::string trim(std::string s)
+{
+    while (!s.empty() && (s.back() == '\n' || s.back() == ' '))
+        s.pop_back();
+    return s;
+}
+
+// ---------------------------------------------------------------------------
+// Messages: everything goes to stderr; -q keeps only errors.
+
+class Console {
+public:
+    Console(bool quiet, bool show_progress)
+        : m_quiet(quiet)
+        , m_show_progress(show_progress && !quiet)
+    {
+    }
+
+    void info(const std::string& msg) const
+    {
+        if (!m_quiet)
+            std::cerr << "filmgrain: " << msg << std::endl;
+    }
+    void warning(const std::string& msg) const
+    {
+        if (!m_quiet)
+            std::cerr << "filmgrain: warning: " << msg << std::endl;
+    }
+    int fail(const std::string& msg) const
+    {
+        end_progress();
+        std::cerr << "filmgrain: error: " << msg << std::endl;
+        return kExitError;
+    }
+    int fail(const Status& s) const { return fail(s.message()); }
+    int fail_interrupted() const
+    {
+        const int sig = static_cast<int>(g_signal);
+        const char* name = sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM"
+                                                    : sig == SIGHUP  ? "SIGHUP"
+                                                                     : "a signal";
+        fail(std::string("interrupted by ") + name + ": no output written");
+        return kExitSignalBase + sig;
+    }
+
+    /// A single updating line: "filmgrain: simulating  42%".
+    void progress(double fraction) const
+    {
+        if (!m_show_progress)
+            return;
+        const int percent = static_cast<int>(fraction * 100.0);
+        if (percent == m_percent)
+            return;
+        m_percent = percent;
+        std::cerr << "\rfilmgrain: simulating " << std::setw(3) << percent << "%" << std::flush;
+        m_line_open = true;
+    }
+    void end_progress() const
+    {
+        if (m_line_open)
+            std::cerr << std::endl;
+        m_line_open = false;
+        m_percent   = -1;
+    }
+
+private:
+    bool m_quiet;
+    bool m_show_progress;
+    mutable int m_percent    = -1;
+    mutable bool m_line_open = false;
+};
+
+// ---------------------------------------------------------------------------
+// Informational commands.
+
+int list_stocks()
+{
+    for (const std::string& name : preset_names()) {
+        Stock stock;
+        const Status s = load_stock(name, stock);
+        std::cout << name << (name == default_preset_name() ? " (default)" : "") << "\n    "
+                  << (s ? stock.description : "cannot load: " + s.message()) << "\n";
+    }
+    return 0;
+}
+
+int print_stock(const std::string& name_or_path, const Console& con)
+{
+    Stock stock;
+    if (Status s = load_stock(name_or_path, stock); !s)
+        return con.fail(s);
+    std::cout << stock_to_json(stock, 2) << "\n";
+    return 0;
+}
+
+// ---------------------------------------------------------------------------
+// Rendering stages.
+
+Status read_input(const std::string& path, OIIO::ImageBuf& out)
+{
+    std::error_code ec;
+    if (!fs::exists(path, ec))
+        return Status::errorf("input '", path, "' does not exist");
+    if (fs::is_directory(path, ec))
+        return Status::errorf("input '", path, "' is a directory, not an image");
+    // Keep unassociated alpha as stored: colour channels are read unchanged
+    // (alpha itself is ignored by the simulation).
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    OIIO::ImageBuf buf(path, 0, 0, nullptr, &config);
+    if (!buf.read(0, 0, true, OIIO::TypeFloat))
+        return Status::errorf("cannot read input '", path, "': ", trim(buf.geterror()));
+    if (buf.deep())
+        return Status::errorf("input '", path, "' is a deep image: not supported");
+    const int nc = buf.spec().nchannels;
+    if (nc != 1 && nc < 3)
+        return Status::errorf("input '", path, "' has ", nc,
+                              " channels: expected 1 (grey) or at least 3 (R, G, B first)");
+    out = std::move(buf);
+    return {};
+}
+
+OIIO::ImageBuf make_wedge()
+{
+    const WedgeSpec spec;
+    const std::vector<float> pixels = make_step_wedge(spec);
+    OIIO::ImageBuf buf(OIIO::ImageSpec(static_cast<int>(spec.width_px()),
+                                       static_cast<int>(spec.height_px), 1, OIIO::TypeFloat));
+    buf.set_pixels(buf.roi(), OIIO::TypeFloat, pixels.data());
+    return buf;
+}
+
+/// Chooses INPUT's colour space, converts `src` in place to the config's
+/// scene_linear and says which space was used. 1-channel images stay grey
+/// when the conversion is a no-op, else become (y, y, y) first.
+Status convert_to_scene_linear(const CliArgs& a, OIIO::ImageBuf& src, const Console& con,
+                               std::string& chosen)
+{
+    const std::string declared = src.spec().get_string_attribute("oiio:ColorSpace");
+    std::string reason;
+    if (a.has_iscolorspace) {
+        chosen = a.iscolorspace;
+        reason = "--iscolorspace";
+    } else if (!declared.empty()) {
+        chosen = declared;
+        reason = "the file's oiio:ColorSpace";
+    } else {
+        chosen = "scene_linear";
+        reason = "the file declares none";
+    }
+
+    std::unique_ptr<ocio::InputConverter> conv;
+    if (Status s = ocio::InputConverter::create(a.colorconfig, chosen, conv); !s) {
+        // Is it the config or the colour space name?
+        std::unique_ptr<ocio::InputConverter> probe;
+        if (Status c = ocio::InputConverter::create(a.colorconfig, "scene_linear", probe); !c)
+            return c;
+        if (a.has_iscolorspace)
+            return Status::errorf("--iscolorspace ", chosen, ": ", s.message());
+        if (declared.empty())
+            return s;
+        return Status::errorf("input '", a.input, "' declares colour space '", declared,
+                              "' (oiio:ColorSpace), which the OCIO config does not know; "
+                              "name its colour space with --iscolorspace NAME (",
+                              s.message(), ")");
+    }
+    const ocio::ConfigInfo& cfg = conv->config();
+    con.info("input colour space: " + chosen + " (" + reason + "; OCIO config: "
+             + (cfg.path.empty() ? cfg.source : cfg.source + " " + cfg.path) + ")");
+    if (conv->is_noop())
+        return {};
+
+    if (src.spec().nchannels == 1) {
+        const int grey[3] = { 0, 0, 0 };
+        OIIO::ImageBuf rgb = OIIO::ImageBufAlgo::channels(src, 3, grey);
+        if (rgb.has_error())
+            return Status::errorf("cannot expand the grey input to RGB: ", trim(rgb.geterror()));
+        src = std::move(rgb);
+    }
+    float* pixels = static_cast<float*>(src.localpixels());
+    if (!pixels || src.spec().format != OIIO::TypeFloat)
+        return Status::error("internal: the input is not a local float image");
+    conv->apply_rgb_strided(pixels, static_cast<size_t>(src.spec().image_pixels()),
+                            src.spec().nchannels);
+    return {};
+}
+
+Status write_text_file(const std::string& path, const std::string& text)
+{
+    errno = 0;
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out)
+        return Status::errorf("cannot write '", path, "'",
+                              errno ? std::string(": ") + std::strerror(errno) : std::string());
+    return {};
+}
+
+Status write_preview(const OIIO::ImageBuf& density, const Stock& stock,
+                     const std::string& temp_path, const std::string& final_path)
+{
+    std::vector<std::string> names;
+    for (const Layer& l : stock.layers)
+        names.push_back(l.name);
+    const OIIO::ImageSpec& ds = density.spec();
+    const Preview p = make_preview(static_cast<const float*>(density.localpixels()), ds.width,
+                                   ds.height, names, stock.base_density);
+    OIIO::ImageSpec spec(ds.width, ds.height, p.channels, OIIO::TypeUInt8);
+    if (p.channels == 1)
+        spec.channelnames = { "Y" };
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    OIIO::ImageBuf buf(spec);
+    buf.set_pixels(buf.roi(), OIIO::TypeUInt8, p.pixels.data());
+    if (!buf.write(temp_path, OIIO::TypeUnknown, "png"))
+        return Status::errorf("cannot write preview '", final_path, "': ", trim(buf.geterror()));
+    return {};
+}
+
+std::string format_seconds(double s)
+{
+    std::ostringstream out;
+    out << std::setprecision(3) << s;
+    return out.str();
+}
+
+int render(const CliArgs& a, const Console& con)
+{
+    const auto t_start = Clock::now();
+    if (Status s = validate_render_args(a); !s)
+        return con.fail(s);
+
+    const FilmgrainCommand& cmd = a.filmgrain;
+    FilmgrainOptions opts;
+    if (Status s = load_stock(cmd.stock, opts.stock); !s)
+        return con.fail(s);
+    opts.scene        = cmd.scene;
+    opts.engine       = cmd.engine;
+    opts.scan_width   = cmd.scan_width;
+    opts.scan_height  = cmd.scan_height;
+    opts.tile_size_px = cmd.tile_size_px;
+    opts.progress     = [&con](double f) {
+        if (interrupted())
+            return false;
+        con.progress(f);
+        return true;
+    };
+    OIIO::ROI roi;  // undefined: the whole scan
+    if (cmd.has_roi)
+        roi = OIIO::ROI(static_cast<int>(cmd.roi_x), static_cast<int>(cmd.roi_x + cmd.roi_width),
+                        static_cast<int>(cmd.roi_y),
+                        static_cast<int>(cmd.roi_y + cmd.roi_height));
+
+    // Reserve every output first: an unwritable directory fails now, not
+    // after the render. The temporaries are removed on every failure path
+    // (OutputFiles' destructor).
+    OutputFiles files;
+    std::string exr_temp, stats_temp, preview_temp;
+    if (Status s = files.reserve(a.output, exr_temp); !s)
+        return con.fail(s);
+    if (!a.preview_path.empty())
+        if (Status s = files.reserve(a.preview_path, preview_temp); !s)
+            return con.fail(s);
+    if (!a.stats_path.empty())
+        if (Status s = files.reserve(a.stats_path, stats_temp); !s)
+            return con.fail(s);
+
+    RunReport report;
+    report.stock_name = opts.stock.name;
+    report.scene      = opts.scene;
+
+    // Read.
+    auto t = Clock::now();
+    OIIO::ImageBuf src;
+    if (a.wedge) {
+        src                     = make_wedge();
+        report.input_file       = "wedge";
+        report.input_colorspace = "scene_linear";
+        con.info("input: the built-in step wedge, " + std::to_string(src.spec().width) + "x"
+                 + std::to_string(src.spec().height) + " scene-linear grey");
+    } else {
+        if (Status s = read_input(a.input, src); !s)
+            return con.fail(s);
+        report.input_file = a.input;
+    }
+    report.seconds.read = seconds_since(t);
+    if (interrupted())
+        return con.fail_interrupted();
+
+    // Colour.
+    t = Clock::now();
+    if (!a.wedge)
+        if (Status s = convert_to_scene_linear(a, src, con, report.input_colorspace); !s)
+            return con.fail(s);
+    report.seconds.color = seconds_since(t);
+    if (interrupted())
+        return con.fail_interrupted();
+
+    // Simulate.
+    t = Clock::now();
+    OIIO::ImageBuf dst;
+    const bool ok = IBA::filmgrain(dst, src, opts, roi, a.threads, &report.render);
+    con.end_progress();
+    report.seconds.simulate = seconds_since(t);
+    if (interrupted())
+        return con.fail_interrupted();
+    if (!ok) {
+        // The operator's messages start with its name, as OIIO's do.
+        std::string msg = trim(dst.geterror());
+        if (msg.rfind("filmgrain: ", 0) == 0)
+            msg.erase(0, std::strlen("filmgrain: "));
+        return con.fail(msg);
+    }
+
+    RenderSettings geometry_settings;
+    geometry_settings.scan_width  = opts.scan_width;
+    geometry_settings.scan_height = opts.scan_height;
+    if (Status s = scan_geometry(opts.scene, src.spec().width, src.spec().height,
+                                 geometry_settings, report.scan);
+        !s)
+        return con.fail(s);
+    const OIIO::ROI data = dst.roi();
+    report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };
+
+    const InputStats& in = report.render.input;
+    if (in.nonfinite_pixels)
+        con.warning(std::to_string(in.nonfinite_pixels) + " of the "
+                    + std::to_string(in.pixels_read)
+                    + " input pixels read have NaN or Inf values: they expose nothing");
+    if (in.negative_pixels)
+        con.warning(std::to_string(in.negative_pixels) + " of the "
+                    + std::to_string(in.pixels_read)
+                    + " input pixels read have negative values: read as no exposure");
+
+    // Write, all or nothing.
+    t = Clock::now();
+    dst.specmod().attribute("compression", a.output_modifiers.compression);
+    const OIIO::TypeDesc type
+        = a.output_type == OutputType::half16 ? OIIO::TypeHalf : OIIO::TypeFloat;
+    if (!dst.write(exr_temp, type, "openexr"))
+        return con.fail("cannot write '" + a.output + "': " + trim(dst.geterror()));
+    if (!a.preview_path.empty())
+        if (Status s = write_preview(dst, opts.stock, preview_temp, a.preview_path); !s)
+            return con.fail(s);
+    report.seconds.write = seconds_since(t);
+    report.seconds.total = seconds_since(t_start);
+    if (!a.stats_path.empty())
+        if (Status s = write_text_file(stats_temp, stats_json(report)); !s)
+            return con.fail("cannot write --stats '" + a.stats_path + "': " + s.message());
+    if (interrupted())
+        return con.fail_interrupted();
+    if (Status s = files.commit(); !s)
+        return con.fail(s);
+
+    std::string layers;
+    for (const Layer& l : opts.stock.layers)
+        layers += (layers.empty() ? "" : ",") + l.name;
+    std::ostringstream summary;
+    summary << "wrote " << a.output << " (" << data.width() << "x" << data.height();
+    if (data.width() != report.scan.width || data.height() != report.scan.height)
+        summary << " of the " << report.scan.width << "x" << report.scan.height << " scan";
+    summary << ", " << opts.stock.layers.size()
+            << (opts.stock.layers.size() == 1 ? " layer " : " layers ") << layers << ") in "
+            << format_seconds(seconds_since(t_start)) << " s";
+    con.info(summary.str());
+    return 0;
+}
+
+int run(int argc, const char** argv)
+{
+    if (wants_help(argc, argv)) {
+        std::cout << help_text();
+        return 0;
+    }
+    CliArgs args;
+    if (Status s = parse_command_line(argc, argv, args); !s)
+        return Console(false, false).fail(s);
+    const Console con(args.quiet, args.progress || ::isatty(STDERR_FILENO));
+
+    if (args.version || args.list_stocks || !args.print_stock.empty()) {
+        if (!args.input.empty() || args.wedge || args.has_filmgrain || !args.output.empty())
+            return con.fail("--version, --list-stocks and --print-stock print and exit: do "
+                            "not combine them with INPUT, --wedge, --filmgrain or -o");
+        if (args.version)
+            std::cout << "filmgrain " << version_string() << " (OpenImageIO "
+                      << OIIO_VERSION_STRING << ")\n";
+        if (args.list_stocks)
+            list_stocks();
+        if (!args.print_stock.empty())
+            return print_stock(args.print_stock, con);
+        return 0;
+    }
+    if (argc <= 1) {
+        std::cerr << help_text();
+        return kExitError;
+    }
+
+    install_signal_handlers();
+    if (args.threads > 0)
+        OIIO::attribute("threads", args.threads);
+    return render(args, con);
+}
+
+}  // namespace
+
+}  // namespace filmgrain::cli
+
+int main(int argc, const char** argv)
+{
+    int status = filmgrain::cli::kExitError;
+    try {
+        status = filmgrain::cli::run(argc, argv);
+    } catch (const std::exception& e) {
+        std::cerr << "filmgrain: error: internal error: " << e.what() << std::endl;
+    } catch (...) {
+        std::cerr << "filmgrain: error: internal error (unknown exception)" << std::endl;
+    }
+    // Leave no OIIO error pending (OIIO reports those at exit).
+    OIIO::geterror();
+    return status;
+}

@@ -1,0 +1,457 @@
+// filmgrain CLI: parsing of the --filmgrain and -o modifiers (modifiers.h).
+//
+// One table lists every modifier with its value form, help, default printer
+// and parser: --help, the "valid modifiers" list of errors and the parser
+// all walk it, so a modifier cannot be documented under one name and parsed
+// under another. Ranges of the scene settings are checked by the core's
+// SceneSettings::validate(), the one place they are defined.
+#include "modifiers.h"
+
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <exception>
+#include <sstream>
+#include <string_view>
+#include <system_error>
+#include <utility>
+
+namespace filmgrain::cli {
+
+namespace {
+
+/// Longest piece of user input quoted in a message.
+constexpr size_t kMaxQuoted = 100;
+
+/// `s` made safe to print: control and non-ASCII bytes as \xHH, truncated.
+std::string printable(std::string_view s)
+{
+    static const char* hex = "0123456789abcdef";
+    std::string out;
+    for (size_t i = 0; i < s.size(); ++i) {
+        if (i == kMaxQuoted) {
+            out += "...";
+            break;
+        }
+        const auto c = static_cast<unsigned char>(s[i]);
+        if (c >= 0x20 && c < 0x7f) {
+            out += static_cast<char>(c);
+        } else {
+            out += "\\x";
+            out += hex[c >> 4];
+            out += hex[c & 15];
+        }
+    }
+    return out;
+}
+
+std::string format_number(double v)
+{
+    std::ostringstream out;
+    out << v;  // 6 significant digits, like %g
+    return out.str();
+}
+
+/// A finite decimal number, fully consumed. An optional leading '+' is
+/// accepted (exposure=+1). On failure `why` says what is wrong.
+bool parse_double(std::string_view s, double& out, std::string& why)
+{
+    if (!s.empty() && s[0] == '+' && s.size() > 1
+        && ((s[1] >= '0' && s[1] <= '9') || s[1] == '.'))
+        s.remove_prefix(1);
+    double v          = 0.0;
+    const char* end   = s.data() + s.size();
+    const auto result = std::from_chars(s.data(), end, v, std::chars_format::general);
+    if (result.ec == std::errc::result_out_of_range) {
+        why = "out of the range of a double";
+        return false;
+    }
+    if (result.ec != std::errc() || result.ptr != end) {
+        why = "not a decimal number";
+        return false;
+    }
+    if (!std::isfinite(v)) {
+        why = "not a finite number";
+        return false;
+    }
+    out = v;
+    return true;
+}
+
+/// A non-negative whole number in [0, max], decimal digits only (no sign,
+/// no spaces), fully consumed.
+bool parse_count(std::string_view s, uint64_t max, uint64_t& out, std::string& why)
+{
+    if (s.empty()) {
+        why = "empty number";
+        return false;
+    }
+    for (char c : s)
+        if (c < '0' || c > '9') {
+            why = "not a non-negative whole number (decimal digits only)";
+            return false;
+        }
+    uint64_t v        = 0;
+    const char* end   = s.data() + s.size();
+    const auto result = std::from_chars(s.data(), end, v, 10);
+    if (result.ec == std::errc::result_out_of_range || (result.ec == std::errc() && v > max)) {
+        why = "too large (at most " + std::to_string(max) + ")";
+        return false;
+    }
+    if (result.ec != std::errc() || result.ptr != end) {
+        why = "not a non-negative whole number";
+        return false;
+    }
+    out = v;
+    return true;
+}
+
+/// A whole number in [lo, hi] (lo >= 0).
+bool parse_int_in(std::string_view s, int64_t lo, int64_t hi, int64_t& out, std::string& why)
+{
+    uint64_t v = 0;
+    if (!parse_count(s, static_cast<uint64_t>(hi), v, why))
+        return false;
+    if (static_cast<int64_t>(v) < lo) {
+        why = "must be at least " + std::to_string(lo);
+        return false;
+    }
+    out = static_cast<int64_t>(v);
+    return true;
+}
+
+/// Image sides and coordinates must fit OIIO's 32-bit ints.
+constexpr int64_t kMaxPixels = INT_MAX;
+
+/// How a value failed: a message and (optionally) nothing else.
+using ParseFn   = bool (*)(std::string_view value, FilmgrainCommand& cmd, std::string& why);
+using DefaultFn = std::string (*)(const FilmgrainCommand& defaults);
+
+struct Modifier {
+    const char* key;
+    const char* form;
+    const char* help;
+    DefaultFn show_default;
+    ParseFn parse;
+};
+
+bool parse_stock(std::string_view v, FilmgrainCommand& cmd, std::string&)
+{
+    cmd.stock = std::string(v);
+    return true;
+}
+
+bool parse_exposure(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    return parse_double(v, cmd.scene.exposure_stops, why);
+}
+
+/// Seconds as a decimal number or a fraction N/D (shutter=1/48).
+bool parse_shutter(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    const size_t slash = v.find('/');
+    if (slash == std::string_view::npos)
+        return parse_double(v, cmd.scene.shutter_s, why);
+    double num = 0.0, den = 0.0;
+    if (!parse_double(v.substr(0, slash), num, why)
+        || !parse_double(v.substr(slash + 1), den, why)) {
+        why = "not a number or a fraction N/D of two numbers";
+        return false;
+    }
+    if (den == 0.0) {
+        why = "division by zero";
+        return false;
+    }
+    const double s = num / den;
+    if (!std::isfinite(s)) {
+        why = "not a finite number";
+        return false;
+    }
+    cmd.scene.shutter_s = s;
+    return true;
+}
+
+bool parse_seed(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    uint64_t seed = 0;
+    if (!parse_count(v, UINT64_MAX, seed, why)) {
+        why += "; a seed is a whole number in [0, 18446744073709551615]";
+        return false;
+    }
+    cmd.scene.seed = seed;
+    return true;
+}
+
+bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    return parse_double(v, cmd.scene.frame_width_mm, why);
+}
+
+bool parse_scan(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    const size_t x = v.find('x');
+    int64_t w = 0, h = 0;
+    if (!parse_int_in(v.substr(0, x), 1, kMaxPixels, w, why)) {
+        why = "width: " + why;
+        return false;
+    }
+    if (x != std::string_view::npos && !parse_int_in(v.substr(x + 1), 1, kMaxPixels, h, why)) {
+        why = "height: " + why;
+        return false;
+    }
+    cmd.scan_width  = w;
+    cmd.scan_height = h;
+    return true;
+}
+
+bool parse_roi(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    static const char* names[4] = { "x", "y", "width", "height" };
+    int64_t values[4]           = { 0, 0, 0, 0 };
+    for (int i = 0; i < 4; ++i) {
+        const size_t comma = v.find(',');
+        if ((i < 3) != (comma != std::string_view::npos)) {
+            why = "must be four numbers separated by commas";
+            return false;
+        }
+        const std::string_view part = v.substr(0, comma);
+        if (!parse_int_in(part, i < 2 ? 0 : 1, kMaxPixels, values[i], why)) {
+            why = std::string(names[i]) + ": " + why;
+            return false;
+        }
+        v = i < 3 ? v.substr(comma + 1) : std::string_view();
+    }
+    if (values[0] + values[2] > kMaxPixels || values[1] + values[3] > kMaxPixels) {
+        why = "x + width and y + height must be at most " + std::to_string(kMaxPixels);
+        return false;
+    }
+    cmd.has_roi    = true;
+    cmd.roi_x      = values[0];
+    cmd.roi_y      = values[1];
+    cmd.roi_width  = values[2];
+    cmd.roi_height = values[3];
+    return true;
+}
+
+/// Engines the CLI knows by name (render.h has no list of them).
+constexpr Engine kEngines[] = { Engine::exact };
+
+std::string engine_list()
+{
+    std::string s;
+    for (Engine e : kEngines)
+        s += std::string(s.empty() ? "" : ", ") + engine_name(e);
+    return s;
+}
+
+bool parse_engine_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (!parse_engine(std::string(v), cmd.engine)) {
+        why = "unknown engine (known: " + engine_list() + ")";
+        return false;
+    }
+    return true;
+}
+
+/// RenderSettings::tile_size_px's documented range.
+constexpr int64_t kMaxTile = 4096;
+
+bool parse_tile(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    int64_t t = 0;
+    if (!parse_int_in(v, 1, kMaxTile, t, why))
+        return false;
+    cmd.tile_size_px = static_cast<int>(t);
+    return true;
+}
+
+std::string default_shutter(const FilmgrainCommand& d)
+{
+    std::string s     = format_number(d.scene.shutter_s);
+    const double recip = 1.0 / d.scene.shutter_s;
+    if (recip > 1.0 && std::abs(recip - std::round(recip)) < 1e-9 * recip)
+        s += " (1/" + format_number(std::round(recip)) + ")";
+    return s;
+}
+
+std::string default_scan(const FilmgrainCommand& d)
+{
+    if (!d.scan_width && !d.scan_height)
+        return "the input's size";
+    return std::to_string(d.scan_width) + "x" + std::to_string(d.scan_height);
+}
+
+std::string default_roi(const FilmgrainCommand& d)
+{
+    if (!d.has_roi)
+        return "the whole scan";
+    return std::to_string(d.roi_x) + "," + std::to_string(d.roi_y) + ","
+           + std::to_string(d.roi_width) + "," + std::to_string(d.roi_height);
+}
+
+const Modifier kModifiers[] = {
+    { "stock", "NAME|FILE",
+      "film stock: a built-in preset name or a stock JSON file (no ':' in the path)",
+      [](const FilmgrainCommand& d) { return d.stock; }, parse_stock },
+    { "exposure", "STOPS", "exposure offset in stops relative to the stock's grey, [-64, 64]",
+      [](const FilmgrainCommand& d) { return format_number(d.scene.exposure_stops); },
+      parse_exposure },
+    { "shutter", "SECONDS", "time the shutter is open, seconds or a fraction such as 1/48, (0, 1e7]",
+      default_shutter, parse_shutter },
+    { "seed", "N", "grain pattern: a whole number in [0, 2^64 - 1]",
+      [](const FilmgrainCommand& d) { return std::to_string(d.scene.seed); }, parse_seed },
+    { "width_mm", "MM", "width of the film frame, millimetres, (0, 1e9]",
+      [](const FilmgrainCommand& d) { return format_number(d.scene.frame_width_mm); },
+      parse_width_mm },
+    { "scan", "WxH|W",
+      "scan (output) size in pixels over the whole frame; W alone keeps the frame's aspect",
+      default_scan, parse_scan },
+    { "roi", "X,Y,W,H", "region of the scan to render, scan pixels (must lie inside the scan)",
+      default_roi, parse_roi },
+    { "engine", "NAME", "simulation engine",
+      [](const FilmgrainCommand& d) { return std::string(engine_name(d.engine)); },
+      parse_engine_value },
+    { "tile", "N", "work tile side in scan pixels, [1, 4096]; speed only, never the output",
+      [](const FilmgrainCommand& d) { return std::to_string(d.tile_size_px); }, parse_tile },
+};
+
+std::string modifier_list()
+{
+    std::string s;
+    for (const Modifier& m : kModifiers)
+        s += std::string(s.empty() ? "" : ", ") + m.key;
+    return s;
+}
+
+/// One key=value of a command-line word.
+struct KeyValue {
+    std::string_view key;
+    std::string_view value;
+};
+
+/// Splits `arg` into its option name (before the first ':') and its
+/// key=value modifiers. Empty modifiers, missing '=' and repeated keys are
+/// errors.
+Status split_modifiers(std::string_view arg, std::string& option, std::vector<KeyValue>& out)
+{
+    out.clear();
+    const size_t colon = arg.find(':');
+    option             = printable(arg.substr(0, colon));
+    if (colon == std::string_view::npos)
+        return {};
+    std::string_view rest = arg.substr(colon + 1);
+    while (true) {
+        const size_t next          = rest.find(':');
+        const std::string_view mod = rest.substr(0, next);
+        if (mod.empty())
+            return Status::errorf(option, ": empty modifier in '", printable(arg),
+                                  "'; modifiers are written :key=value");
+        const size_t eq = mod.find('=');
+        if (eq == std::string_view::npos)
+            return Status::errorf(option, ": modifier '", printable(mod),
+                                  "' has no value; modifiers are written :key=value");
+        KeyValue kv { mod.substr(0, eq), mod.substr(eq + 1) };
+        if (kv.key.empty())
+            return Status::errorf(option, ": modifier '", printable(mod),
+                                  "' has no key; modifiers are written :key=value");
+        for (const KeyValue& prev : out)
+            if (prev.key == kv.key)
+                return Status::errorf(option, ": modifier '", printable(kv.key),
+                                      "' given twice (", printable(kv.key), "=",
+                                      printable(prev.value), " and ", printable(kv.key), "=",
+                                      printable(kv.value), ")");
+        out.push_back(kv);
+        if (next == std::string_view::npos)
+            break;
+        rest = rest.substr(next + 1);
+    }
+    return {};
+}
+
+Status parse_filmgrain_impl(const std::string& arg, FilmgrainCommand& out)
+{
+    std::string option;
+    std::vector<KeyValue> mods;
+    if (Status s = split_modifiers(arg, option, mods); !s)
+        return s;
+    FilmgrainCommand cmd;
+    for (const KeyValue& kv : mods) {
+        const Modifier* mod = nullptr;
+        for (const Modifier& m : kModifiers)
+            if (kv.key == m.key)
+                mod = &m;
+        if (!mod)
+            return Status::errorf(option, ": unknown modifier '", printable(kv.key),
+                                  "'; valid modifiers: ", modifier_list());
+        if (kv.value.empty())
+            return Status::errorf(option, ": ", mod->key, "= has an empty value; expected ",
+                                  mod->key, "=", mod->form, " (", mod->help, ")");
+        std::string why;
+        if (!mod->parse(kv.value, cmd, why))
+            return Status::errorf(option, ": ", mod->key, "=", printable(kv.value), ": ", why,
+                                  "; expected ", mod->key, "=", mod->form, " (", mod->help,
+                                  ")");
+    }
+    if (Status s = cmd.scene.validate(); !s)
+        return Status::errorf(option, ": ", s.message());
+    out = std::move(cmd);
+    return {};
+}
+
+}  // namespace
+
+std::vector<ModifierDoc> filmgrain_modifier_docs()
+{
+    const FilmgrainCommand defaults;
+    std::vector<ModifierDoc> docs;
+    for (const Modifier& m : kModifiers)
+        docs.push_back({ m.key, m.form, m.help, m.show_default(defaults) });
+    return docs;
+}
+
+Status parse_filmgrain_modifiers(const std::string& arg, FilmgrainCommand& out)
+{
+    try {
+        return parse_filmgrain_impl(arg, out);
+    } catch (const std::exception& e) {  // std::bad_alloc only
+        return Status::errorf("--filmgrain: ", e.what());
+    }
+}
+
+std::vector<std::string> exr_compressions()
+{
+    return { "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab" };
+}
+
+Status parse_output_modifiers(const std::string& arg, OutputModifiers& out)
+{
+    try {
+        std::string option;
+        std::vector<KeyValue> mods;
+        if (Status s = split_modifiers(arg, option, mods); !s)
+            return s;
+        OutputModifiers result;
+        const std::vector<std::string> names = exr_compressions();
+        std::string list;
+        for (const auto& n : names)
+            list += (list.empty() ? "" : ", ") + n;
+        for (const KeyValue& kv : mods) {
+            if (kv.key != "compression")
+                return Status::errorf(option, ": unknown modifier '", printable(kv.key),
+                                      "'; valid modifiers: compression");
+            bool known = false;
+            for (const auto& n : names)
+                known |= kv.value == n;
+            if (!known)
+                return Status::errorf(option, ": compression=", printable(kv.value),
+                                      ": unknown OpenEXR compression; expected one of ", list);
+            result.compression = std::string(kv.value);
+        }
+        out = std::move(result);
+        return {};
+    } catch (const std::exception& e) {
+        return Status::errorf("-o: ", e.what());
+    }
+}
+
+}  // namespace filmgrain::cli

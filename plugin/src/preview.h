@@ -1,0 +1,41 @@
+// filmgrain CLI: the 8-bit preview positive of a density image (--preview).
+// Plain buffers in and out; no OIIO.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace filmgrain::cli {
+
+/// The layers shown by the preview, as indices into the layer list: three
+/// (R, G, B) when layers named R, G and B exist (taken by name) or when
+/// there are at least three layers (the first three, stock order); else one
+/// (grey: the first layer).
+std::vector<int> preview_layers(const std::vector<std::string>& layer_names);
+
+/// The q-quantile (q in [0, 1]) of the finite values of `values` (nearest
+/// rank, floor(q * (n - 1))); 0 when there are none.
+double quantile(std::vector<float> values, double q);
+
+/// The percentile of the density that maps to white.
+constexpr double kPreviewWhiteQuantile = 0.999;
+/// The preview's display encoding: p^(1 / kPreviewGamma).
+constexpr double kPreviewGamma = 2.2;
+
+struct Preview {
+    int64_t width = 0;
+    int64_t height = 0;
+    int channels = 0;  ///< 1 (grey) or 3 (RGB)
+    std::vector<uint8_t> pixels;  ///< packed, row-major
+};
+
+/// p = clamp((D - base) / (D_hi - base), 0, 1) with D_hi the 99.9th
+/// percentile of all densities of all layers (one scale for every channel,
+/// so no colour shift), stored as round(255 * p^(1/2.2)). If D_hi <= base
+/// (an unexposed film) every pixel is 0. `density` holds width x height
+/// pixels of layer_names.size() interleaved floats.
+Preview make_preview(const float* density, int64_t width, int64_t height,
+                     const std::vector<std::string>& layer_names, double base_density);
+
+}  // namespace filmgrain::cli

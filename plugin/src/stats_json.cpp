@@ -1,0 +1,52 @@
+// filmgrain CLI: the --stats JSON document (stats_json.h).
+#include "stats_json.h"
+
+#include <nlohmann/json.hpp>
+
+#include "filmgrain/version.h"
+
+namespace filmgrain::cli {
+
+std::string stats_json(const RunReport& r)
+{
+    using Json = nlohmann::ordered_json;
+    Json j;
+    j["engine"]         = r.render.engine;
+    j["version"]        = version_string();
+    j["stock"]          = r.stock_name;
+    j["seed"]           = r.scene.seed;
+    j["exposure_stops"] = r.scene.exposure_stops;
+    j["shutter_s"]      = r.scene.shutter_s;
+    j["frame_width_mm"] = r.scene.frame_width_mm;
+    j["seconds"]        = { { "read", r.seconds.read },
+                            { "color", r.seconds.color },
+                            { "simulate", r.seconds.simulate },
+                            { "write", r.seconds.write },
+                            { "total", r.seconds.total } };
+    j["scan"]           = { { "width", r.scan.width },
+                            { "height", r.scan.height },
+                            { "pitch_x_um", r.scan.pitch_x_um },
+                            { "pitch_y_um", r.scan.pitch_y_um } };
+    j["roi"]            = { { "x", r.roi.x_begin },
+                            { "y", r.roi.y_begin },
+                            { "width", r.roi.width() },
+                            { "height", r.roi.height() } };
+    j["input"]          = { { "file", r.input_file },
+                            { "colorspace", r.input_colorspace },
+                            { "pixels_read", r.render.input.pixels_read },
+                            { "nonfinite_pixels", r.render.input.nonfinite_pixels },
+                            { "negative_pixels", r.render.input.negative_pixels } };
+    Json layers = Json::array();
+    for (const LayerStats& l : r.render.layers)
+        layers.push_back({ { "name", l.name },
+                           { "grains", l.grains },
+                           { "developed", l.developed },
+                           { "absorbed_photons", l.absorbed_photons },
+                           { "kinetics_events", l.kinetics_events },
+                           { "mean_density", l.mean_density } });
+    j["layers"] = std::move(layers);
+    // Non-UTF-8 bytes in names (file paths) are replaced, never thrown on.
+    return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+}
+
+}  // namespace filmgrain::cli

@@ -1,0 +1,133 @@
+"""filmgrain --help, --version, --list-stocks, --print-stock."""
+
+import json
+import re
+
+from conftest import FAST, Exr, listing, rgb_ramp, write_image
+
+MODIFIERS = ["stock", "exposure", "shutter", "seed", "width_mm", "scan", "roi",
+             "engine", "tile"]
+
+OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",
+           "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
+           "--list-stocks", "--print-stock", "--version", "--help"]
+
+
+def modifier_lines(help_text):
+    """{key: the help paragraph of :key=...} from the --filmgrain section."""
+    section = help_text.split("--filmgrain modifiers")[1].split("\n\n")[0]
+    entries = {}
+    for block in re.split(r"\n(?=    :)", section):
+        m = re.match(r"\s*:(\w+)=", block)
+        if m:
+            entries[m.group(1)] = " ".join(block.split())
+    return entries
+
+
+def test_help_lists_every_option_and_modifier_with_default(run):
+    r = run("--help")
+    assert r.returncode == 0, r.stderr
+    text = r.stdout
+    for opt in OPTIONS:
+        assert re.search(r"^\s+" + re.escape(opt) + r"\b", text, re.M) or \
+            (", " + opt) in text, opt
+    mods = modifier_lines(text)
+    assert sorted(mods) == sorted(MODIFIERS)
+    for key, line in mods.items():
+        assert "Default:" in line, (key, line)
+    # The defaults are the library's (SceneSettings, RenderSettings, preset).
+    assert "Default: color-negative." in mods["stock"]
+    assert "Default: 0." in mods["exposure"]
+    assert "Default: 0.0208333 (1/48)." in mods["shutter"]
+    assert "Default: 0." in mods["seed"]
+    assert "Default: 24.89." in mods["width_mm"]
+    assert "Default: exact." in mods["engine"]
+    assert "Default: 64." in mods["tile"]
+    # Presets, config resolution order, exit status.
+    assert "color-negative (default), paper" in text
+    order = [text.index(s) for s in ("1. --colorconfig", "2. $OCIO", "3. the embedded")]
+    assert order == sorted(order)
+    assert "Exit status" in text
+    # -h is the same.
+    assert run("-h").stdout == text
+
+
+def test_help_wins_over_other_errors(run):
+    r = run("--bogus", "--help")
+    assert r.returncode == 0
+    assert "Usage:" in r.stdout
+
+
+def test_no_arguments_is_a_usage_error(run):
+    r = run()
+    assert r.returncode == 1
+    assert "Usage:" in r.stderr
+
+
+def test_version(run):
+    r = run("--version")
+    assert r.returncode == 0, r.stderr
+    assert re.match(r"filmgrain \d+\.\d+\.\d+", r.stdout)
+
+
+def test_list_stocks(run):
+    r = run("--list-stocks")
+    assert r.returncode == 0, r.stderr
+    assert "color-negative (default)" in r.stdout
+    assert re.search(r"^paper$", r.stdout, re.M)
+    # Each name is followed by its description.
+    assert "Stephenson" in r.stdout
+
+
+def test_unknown_option_is_an_error(run):
+    r = run("--filmgrian")
+    assert r.returncode == 1
+    assert "filmgrain: error:" in r.stderr and "--filmgrian" in r.stderr
+
+
+def test_info_options_do_not_combine_with_rendering(run, tmp_path):
+    r = run("--list-stocks", "--wedge", "--filmgrain", "-o", tmp_path / "x.exr")
+    assert r.returncode == 1
+    assert "do not combine" in r.stderr
+    assert listing(tmp_path) == []
+
+
+def test_print_stock_is_json_that_round_trips(run, tmp_path):
+    r = run("--print-stock", "paper")
+    assert r.returncode == 0, r.stderr
+    stock = json.loads(r.stdout)
+    assert stock["name"] == "paper"
+    assert len(stock["layers"]) == 1
+    for key in ("exposure_at_grey_lxs", "development_time_s", "development_tau_s",
+                "fog_tau_s", "base_density", "max_density"):
+        assert key in stock, key
+    pop = stock["layers"][0]["populations"][0]
+    for key in ("grains_per_um2", "diameter_um", "diameter_log_sigma",
+                "quantum_efficiency", "k_pair_per_s", "k_join_per_s", "k_loss_per_s",
+                "rate_area_exponent"):
+        assert key in pop, key
+
+    # The printed JSON is a stock file: printing it again gives the same...
+    path = tmp_path / "paper.json"
+    path.write_text(r.stdout)
+    again = run("--print-stock", path)
+    assert again.returncode == 0, again.stderr
+    assert json.loads(again.stdout) == stock
+
+    # ...and rendering with it equals rendering with the preset.
+    src = write_image(tmp_path / "in.exr", rgb_ramp())
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    ra = run(src, f"--filmgrain:stock=paper:{FAST}", "-o", a)
+    rb = run(src, f"--filmgrain:stock={path}:{FAST}", "-o", b)
+    assert ra.returncode == 0 and rb.returncode == 0, ra.stderr + rb.stderr
+    ea, eb = Exr(a), Exr(b)
+    assert ea.names == eb.names == ["Y"]
+    assert (ea.channels["Y"] == eb.channels["Y"]).all()
+    assert json.loads(eb.attr("filmgrain:stock")) == stock
+
+
+def test_print_stock_unknown(run):
+    r = run("--print-stock", "no-such-stock")
+    assert r.returncode == 1
+    assert "no-such-stock" in r.stderr and "preset" in r.stderr
+    assert r.stdout == ""

@@ -1,0 +1,62 @@
+"""An interrupted run (SIGINT, SIGTERM) cancels the render, removes its
+temporary files, writes no output and exits with 128 + the signal number."""
+
+import os
+import select
+import signal
+import subprocess
+import time
+
+import pytest
+
+from conftest import clean_env, listing
+
+# The wedge over a 6 mm frame on one thread takes several seconds (tens on a
+# slow machine): long enough to be interrupted mid-render. Small tiles keep
+# the cancellation prompt (it is checked between tiles).
+SLOW = ["--wedge", "--filmgrain:width_mm=6:tile=16", "--threads", "1", "--progress"]
+
+
+def wait_for_progress(proc, timeout=60):
+    """Reads stderr until the first progress report: the render is running."""
+    seen = b""
+    deadline = time.monotonic() + timeout
+    fd = proc.stderr.fileno()
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([fd], [], [], 0.5)
+        if ready:
+            chunk = os.read(fd, 4096)
+            if not chunk:
+                break
+            seen += chunk
+            if b"simulating" in seen:
+                return seen
+    pytest.fail(f"no progress report within {timeout} s: {seen!r}")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_interrupt_leaves_nothing(fg_bin, tmp_path, sig):
+    out = tmp_path / "out"
+    out.mkdir()
+    proc = subprocess.Popen([fg_bin, *SLOW, "-o", out / "w.exr", "--stats", out / "s.json",
+                             "--preview", out / "w.png"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=clean_env())
+    try:
+        seen = wait_for_progress(proc)
+        # While it runs, the reserved temporary files exist, under hidden names.
+        assert all(name.startswith(".") and ".tmp-" in name for name in listing(out))
+        assert len(listing(out)) == 3
+        proc.send_signal(sig)
+        start = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        elapsed = time.monotonic() - start
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    err = (seen + err).decode(errors="replace")
+    assert proc.returncode == 128 + sig, err
+    assert "interrupted" in err and signal.Signals(sig).name in err
+    assert "no output written" in err
+    assert elapsed < 20, f"cancellation took {elapsed:.1f} s"
+    assert listing(out) == []

@@ -1,0 +1,250 @@
+"""Successful renders: EXR channels, pixel types, metadata, preview, stats,
+the wedge, NaN/Inf input, colour spaces."""
+
+import json
+import math
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from conftest import (FAST, HEIGHT, WIDTH, Exr, clean_env, listing, minimal_ocio_config,
+                      read_json, rgb_ramp, write_image)
+
+STATS_KEYS = {"engine", "seconds", "version", "stock", "seed", "exposure_stops",
+              "shutter_s", "frame_width_mm", "scan", "roi", "input", "layers"}
+
+
+@pytest.fixture
+def ramp_exr(tmp_path):
+    return write_image(tmp_path / "ramp.exr", rgb_ramp())
+
+
+@pytest.mark.parametrize("dtype,oiio_type", [("float", "float"), ("half", "half"),
+                                             (None, "float")])
+def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
+    out, stats, preview = tmp_path / "out.exr", tmp_path / "s.json", tmp_path / "p.png"
+    args = [ramp_exr, f"--filmgrain:{FAST}:seed=42:exposure=0.5:shutter=1/100",
+            "-o", out, "--stats", stats, "--preview", preview]
+    if dtype:
+        args += ["-d", dtype]
+    r = run(*args)
+    assert r.returncode == 0, r.stderr
+    assert "wrote" in r.stderr
+    assert "input colour space: Linear" in r.stderr  # EXR's oiio:ColorSpace
+
+    exr = Exr(out)
+    stock = json.loads(run("--print-stock", "color-negative").stdout)
+    layer_names = [l["name"] for l in stock["layers"]]
+    assert sorted(exr.names) == sorted(layer_names)
+    assert exr.spec.format == oiio.TypeDesc(oiio_type)
+    assert (exr.spec.width, exr.spec.height) == (WIDTH, HEIGHT)
+    assert (exr.spec.full_width, exr.spec.full_height) == (WIDTH, HEIGHT)
+    for c in exr.channels.values():
+        assert np.isfinite(c).all()
+        assert (c >= stock["base_density"] - 1e-3).all()
+
+    # Metadata contract.
+    assert exr.attr("filmgrain:quantity") == \
+        "negative density: -log10(transmittance) + base density"
+    assert json.loads(exr.attr("filmgrain:stock")) == stock
+    assert exr.attr("filmgrain:stock_name") == "color-negative"
+    assert exr.attr("filmgrain:seed") == "42"
+    assert exr.attr("filmgrain:exposure_stops") == pytest.approx(0.5)
+    assert exr.attr("filmgrain:shutter_s") == pytest.approx(0.01)
+    assert exr.attr("filmgrain:frame_width_mm") == pytest.approx(0.5)
+    assert exr.attr("filmgrain:engine") == "exact"
+    assert exr.attr("filmgrain:version") == \
+        run("--version").stdout.split()[1]
+
+    # Preview: 8-bit RGB PNG of the same size.
+    p = oiio.ImageBuf(str(preview))
+    assert p.spec().format == oiio.TypeDesc("uint8")
+    assert (p.spec().width, p.spec().height, p.spec().nchannels) == (WIDTH, HEIGHT, 3)
+    px = p.get_pixels(oiio.UINT8)
+    assert px.max() > 0
+
+    # Stats contract.
+    s = read_json(stats)
+    assert STATS_KEYS <= set(s)
+    assert set(s["seconds"]) == {"read", "color", "simulate", "write", "total"}
+    assert set(s["scan"]) == {"width", "height", "pitch_x_um", "pitch_y_um"}
+    assert set(s["roi"]) == {"x", "y", "width", "height"}
+    assert set(s["input"]) == {"file", "colorspace", "pixels_read", "nonfinite_pixels",
+                               "negative_pixels"}
+    assert s["engine"] == "exact" and s["stock"] == "color-negative" and s["seed"] == 42
+    assert s["scan"]["width"] == WIDTH and s["scan"]["height"] == HEIGHT
+    assert s["scan"]["pitch_x_um"] == pytest.approx(500.0 / WIDTH)
+    assert s["roi"] == {"x": 0, "y": 0, "width": WIDTH, "height": HEIGHT}
+    assert s["input"]["file"] == str(ramp_exr)
+    assert s["input"]["pixels_read"] == WIDTH * HEIGHT
+    assert s["input"]["nonfinite_pixels"] == 0
+    assert [l["name"] for l in s["layers"]] == layer_names
+    for l in s["layers"]:
+        assert set(l) == {"name", "grains", "developed", "absorbed_photons",
+                          "kinetics_events", "mean_density"}
+        assert l["grains"] > 0 and 0 < l["developed"] <= l["grains"]
+        assert l["mean_density"] == pytest.approx(float(exr.channels[l["name"]].mean()),
+                                                  abs=2e-3)
+
+    # Nothing else in the directory: no temporary file left.
+    assert listing(tmp_path) == sorted(["ramp.exr", "out.exr", "s.json", "p.png"])
+
+
+def test_same_seed_same_pixels_other_seed_other_pixels(run, tmp_path, ramp_exr):
+    outs = []
+    for i, seed in enumerate([1, 1, 2]):
+        out = tmp_path / f"o{i}.exr"
+        r = run(ramp_exr, f"--filmgrain:{FAST}:seed={seed}", "-o", out, "--threads", i + 1)
+        assert r.returncode == 0, r.stderr
+        outs.append(Exr(out).channels["G"])
+    assert (outs[0] == outs[1]).all()
+    assert not (outs[0] == outs[2]).all()
+
+
+def test_one_layer_stock_and_grey_preview(run, tmp_path, ramp_exr):
+    out, preview = tmp_path / "o.exr", tmp_path / "p.png"
+    r = run(ramp_exr, f"--filmgrain:stock=paper:{FAST}", "-o", out, "--preview", preview)
+    assert r.returncode == 0, r.stderr
+    assert Exr(out).names == ["Y"]
+    assert oiio.ImageBuf(str(preview)).spec().nchannels == 1
+
+
+def test_scan_and_roi(run, tmp_path, ramp_exr):
+    full, part = tmp_path / "full.exr", tmp_path / "part.exr"
+    r = run(ramp_exr, f"--filmgrain:{FAST}:scan=64", "-o", full)
+    assert r.returncode == 0, r.stderr
+    f = Exr(full)
+    assert (f.spec.width, f.spec.height) == (64, 48)  # height from the aspect
+    r = run(ramp_exr, f"--filmgrain:{FAST}:scan=64:roi=8,4,20,10", "-o", part,
+            "--stats", tmp_path / "s.json")
+    assert r.returncode == 0, r.stderr
+    p = Exr(part)
+    assert (p.spec.x, p.spec.y, p.spec.width, p.spec.height) == (8, 4, 20, 10)
+    assert (p.spec.full_width, p.spec.full_height) == (64, 48)
+    assert "of the 64x48 scan" in r.stderr
+    # The ROI's pixels are those of the full render (determinism).
+    for name in f.names:
+        assert (p.channels[name] == f.channels[name][4:14, 8:28]).all()
+    assert read_json(tmp_path / "s.json")["roi"] == {"x": 8, "y": 4, "width": 20,
+                                                      "height": 10}
+
+
+def test_wedge_density_increases(run, tmp_path):
+    out, stats = tmp_path / "wedge.exr", tmp_path / "s.json"
+    # A 0.5 mm frame keeps it fast; the paper stock has one layer, Y.
+    r = run("--wedge", "--filmgrain:stock=paper:width_mm=0.5", "-o", out,
+            "--preview", tmp_path / "wedge.png", "--stats", stats)
+    assert r.returncode == 0, r.stderr
+    exr = Exr(out)
+    assert (exr.spec.width, exr.spec.height) == (1008, 96)  # WedgeSpec{}
+    y = exr.channels["Y"]
+    steps = [float(y[:, i * 48:(i + 1) * 48].mean()) for i in range(21)]
+    assert steps[-1] > steps[0] + 0.5, steps
+    # Broadly monotonic: the brighter half is denser than the darker half.
+    assert np.mean(steps[11:]) > np.mean(steps[:10])
+    s = read_json(stats)
+    assert s["input"]["file"] == "wedge"
+    assert s["input"]["colorspace"] == "scene_linear"
+
+
+def test_nan_and_inf_pixels(run, tmp_path):
+    img = rgb_ramp()
+    img[3, 4, 0] = np.nan
+    img[10, 20, :] = np.inf
+    img[15, 7, 2] = -np.inf
+    img[1, 1, 1] = -0.5  # negative: counted separately
+    src = write_image(tmp_path / "nan.exr", img)
+    out, stats = tmp_path / "o.exr", tmp_path / "s.json"
+    r = run(src, f"--filmgrain:{FAST}", "-o", out, "--stats", stats)
+    assert r.returncode == 0, r.stderr
+    assert "warning" in r.stderr and "NaN or Inf" in r.stderr and "3 of the" in r.stderr
+    assert "negative" in r.stderr
+    s = read_json(stats)
+    assert s["input"]["nonfinite_pixels"] == 3
+    assert s["input"]["negative_pixels"] == 1
+    for c in Exr(out).channels.values():
+        assert np.isfinite(c).all()
+    # -q silences the warning.
+    r = run(src, f"--filmgrain:{FAST}", "-o", tmp_path / "q.exr", "-q")
+    assert r.returncode == 0 and r.stderr == ""
+
+
+def mean_density(run, tmp_path, src, *extra, name="o"):
+    stats = tmp_path / f"{name}.json"
+    r = run(src, *extra, f"--filmgrain:{FAST}", "-o", tmp_path / f"{name}.exr",
+            "--stats", stats)
+    assert r.returncode == 0, r.stderr
+    return r, read_json(stats)
+
+
+def test_iscolorspace_changes_the_result(run, tmp_path, ramp_exr):
+    r1, s1 = mean_density(run, tmp_path, ramp_exr, "--iscolorspace", "scene_linear",
+                          name="lin")
+    r2, s2 = mean_density(run, tmp_path, ramp_exr, "--iscolorspace", "sRGB", name="srgb")
+    assert "input colour space: scene_linear (--iscolorspace" in r1.stderr
+    assert "input colour space: sRGB (--iscolorspace" in r2.stderr
+    assert s1["input"]["colorspace"] == "scene_linear"
+    assert s2["input"]["colorspace"] == "sRGB"
+    # sRGB decoding darkens mid-tones: less exposure, less density.
+    d1 = [l["mean_density"] for l in s1["layers"]]
+    d2 = [l["mean_density"] for l in s2["layers"]]
+    assert all(b < a for a, b in zip(d1, d2)), (d1, d2)
+    lin = Exr(tmp_path / "lin.exr").channels["R"]
+    srgb = Exr(tmp_path / "srgb.exr").channels["R"]
+    assert not (lin == srgb).all()
+
+
+def test_png_input_is_read_as_srgb(run, tmp_path):
+    img = (rgb_ramp() * 255).round().astype(np.uint8)
+    png = write_image(tmp_path / "in.png", img, fmt="uint8")
+    r, auto = mean_density(run, tmp_path, png, name="auto")
+    assert "input colour space: sRGB (the file's oiio:ColorSpace" in r.stderr
+    assert auto["input"]["colorspace"] == "sRGB"
+    _, srgb = mean_density(run, tmp_path, png, "--iscolorspace", "sRGB", name="srgb")
+    _, lin = mean_density(run, tmp_path, png, "--iscolorspace", "scene_linear", name="lin")
+    assert (Exr(tmp_path / "auto.exr").channels["G"]
+            == Exr(tmp_path / "srgb.exr").channels["G"]).all()
+    assert not (Exr(tmp_path / "auto.exr").channels["G"]
+                == Exr(tmp_path / "lin.exr").channels["G"]).all()
+
+
+def test_grey_input(run, tmp_path):
+    grey = rgb_ramp()[:, :, 0]
+    src = write_image(tmp_path / "grey.exr", grey)
+    rgb = write_image(tmp_path / "rgb.exr", np.repeat(grey[:, :, None], 3, axis=2))
+    for name, path in (("g", src), ("c", rgb)):
+        r = run(path, f"--filmgrain:{FAST}", "-o", tmp_path / f"{name}.exr")
+        assert r.returncode == 0, r.stderr
+    g, c = Exr(tmp_path / "g.exr"), Exr(tmp_path / "c.exr")
+    for n in g.names:
+        assert (g.channels[n] == c.channels[n]).all()
+    # Through a real conversion (sRGB) the grey input is expanded to RGB.
+    r = run(src, "--iscolorspace", "sRGB", f"--filmgrain:{FAST}", "-o", tmp_path / "s.exr")
+    assert r.returncode == 0, r.stderr
+
+
+def test_ocio_env_is_used(run, tmp_path, ramp_exr):
+    # Only a $OCIO config defines "acescg_test": using it proves $OCIO is read.
+    cfg = tmp_path / "env.ocio"
+    cfg.write_text(minimal_ocio_config("acescg_test"))
+    r = run(ramp_exr, "--iscolorspace", "acescg_test", f"--filmgrain:{FAST}",
+            "-o", tmp_path / "o.exr", env=clean_env(OCIO=str(cfg)))
+    assert r.returncode == 0, r.stderr
+    assert "$OCIO" in r.stderr
+    # --colorconfig wins over $OCIO.
+    r = run(ramp_exr, "--colorconfig", tmp_path / "nope.ocio", f"--filmgrain:{FAST}",
+            "-o", tmp_path / "p.exr", env=clean_env(OCIO=str(cfg)))
+    assert r.returncode == 1 and "nope.ocio" in r.stderr
+
+
+def test_compression_modifier_and_progress(run, tmp_path, ramp_exr):
+    out = tmp_path / "o.exr"
+    r = run(ramp_exr, f"--filmgrain:{FAST}:tile=8", "-o:compression=piz", out,
+            "--progress", "--threads", "1")
+    assert r.returncode == 0, r.stderr
+    assert Exr(out).attr("compression") == "piz"
+    assert "100%" in r.stderr
+    # Without --progress (stderr is not a terminal): no progress line.
+    r = run(ramp_exr, f"--filmgrain:{FAST}", "-o", tmp_path / "p.exr")
+    assert "%" not in r.stderr

@@ -1,0 +1,68 @@
+"""The regression scenes, shared by test_regression.py and update_refs.py.
+
+Each scene is rendered by the filmgrain CLI with a stock file kept here in
+stocks/ (never a preset: presets are still being calibrated) into a small
+half-float, zip-compressed EXR, and compared with ref/<scene>.exr.
+Inputs are generated here (exact float32 formulas), not stored.
+"""
+
+import os
+import subprocess
+
+import numpy as np
+import OpenImageIO as oiio
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+STOCKS = os.path.join(HERE, "stocks")
+REF = os.path.join(HERE, "ref")
+
+
+def gradient(width, height):
+    """Scene-linear RGB: R ramps across (1/64 .. 1), G ramps down, B is a
+    slow diagonal; every value exactly representable in float32."""
+    x = (np.arange(width, dtype=np.float32) + 1) / np.float32(width)
+    y = (np.arange(height, dtype=np.float32) + 1) / np.float32(height)
+    img = np.empty((height, width, 3), np.float32)
+    img[:, :, 0] = x[None, :]
+    img[:, :, 1] = y[::-1, None] * np.float32(0.5)
+    img[:, :, 2] = (x[None, :] + y[:, None]) * np.float32(0.25)
+    return img
+
+
+SCENES = {
+    # The README's main job (--wedge) with a one-layer stock, scanned small:
+    # 1008x96 input over a 2 mm frame scanned at 168x16 (11.9 um pixels).
+    "wedge_one_layer": {
+        "input": None,
+        "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
+                 ":width_mm=2:scan=168x16:seed=1"],
+    },
+    # A 40x30 RGB gradient through three layers (one with two populations).
+    "gradient_three_layer": {
+        "input": (40, 30),
+        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2"],
+    },
+    # A scan of another size than the input: 32x24 in, 48x36 out (ratio 1.5,
+    # so scan pixels straddle input pixels).
+    "scan_resample": {
+        "input": (32, 24),
+        "args": ["--filmgrain:stock={stocks}/one_layer.json:width_mm=1:scan=48:seed=3"],
+    },
+}
+
+
+def render(fg_bin, scene, workdir, output):
+    """Renders `scene` to `output` (half float, zip). Returns the
+    CompletedProcess."""
+    spec = SCENES[scene]
+    args = [a.format(stocks=STOCKS) for a in spec["args"]]
+    if spec["input"]:
+        w, h = spec["input"]
+        src = os.path.join(workdir, scene + "_input.exr")
+        buf = oiio.ImageBuf(oiio.ImageSpec(w, h, 3, oiio.FLOAT))
+        buf.set_pixels(oiio.ROI(), gradient(w, h))
+        assert buf.write(src), buf.geterror()
+        args = [src] + args
+    env = {k: v for k, v in os.environ.items() if k != "OCIO"}  # embedded config
+    return subprocess.run([fg_bin, *args, "-d", "half", "-o:compression=zip", output, "-q"],
+                          capture_output=True, text=True, env=env, timeout=300)
