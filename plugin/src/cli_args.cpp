@@ -79,7 +79,8 @@ std::string wedge_help()
     out << "Render the built-in grey step wedge instead of INPUT: " << w.width_px() << "x"
         << w.height_px << " scene-linear, " << w.steps << " steps of " << w.stops_per_step
         << " stop from " << format_stops(w.step_stops(0)) << " to "
-        << format_stops(w.step_stops(w.steps - 1)) << " stops around 0.18";
+        << format_stops(w.step_stops(w.steps - 1)) << " stops around 0.18, on a test strip "
+        << w.strip_width_mm << " mm wide (width_mm= overrides it)";
     return out.str();
 }
 

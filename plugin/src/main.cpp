@@ -306,6 +306,8 @@ int render(const CliArgs& a, const Console& con)
     if (Status s = load_stock(cmd.stock, opts.stock); !s)
         return con.fail(s);
     opts.scene        = cmd.scene;
+    if (a.wedge && !cmd.has_width_mm)
+        opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
     opts.engine       = cmd.engine;
     opts.scan_width   = cmd.scan_width;
     opts.scan_height  = cmd.scan_height;

@@ -184,6 +184,7 @@ bool parse_seed(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 
 bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
+    cmd.has_width_mm = true;
     return parse_double(v, cmd.scene.frame_width_mm, why);
 }
 

@@ -26,6 +26,8 @@ struct FilmgrainCommand {
     std::string stock = default_preset_name();
     /// `exposure=`, `shutter=`, `seed=`, `width_mm=`.
     SceneSettings scene;
+    /// Whether `width_mm=` was given (the --wedge strip has its own width).
+    bool has_width_mm = false;
     /// `engine=`.
     Engine engine = RenderSettings().engine;
     /// `scan=WxH|W`: scan pixels over the whole frame; 0 = the input's size
