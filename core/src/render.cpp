@@ -295,13 +295,15 @@ InputStats scan_input(const ImageView& input, const FrameGeometry& frame, const 
     for (int64_t y = y0; y < y1; ++y)
         for (int64_t x = x0; x < x1; ++x) {
             const float* px = input.pixel(x, y);
-            bool nonfinite = false, negative = false;
+            bool nonfinite = false, negative = false, denormal = false;
             for (int c = 0; c < nc; ++c) {
                 nonfinite |= !std::isfinite(px[c]);
                 negative |= px[c] < 0.0f;
+                denormal |= std::fpclassify(px[c]) == FP_SUBNORMAL;
             }
             s.nonfinite_pixels += nonfinite;
             s.negative_pixels += negative && !nonfinite;
+            s.denormal_pixels += denormal && !nonfinite;
         }
     s.pixels_read = static_cast<uint64_t>(std::max<int64_t>(0, x1 - x0))
                     * static_cast<uint64_t>(std::max<int64_t>(0, y1 - y0));

@@ -126,11 +126,13 @@ TEST(Render, NonFiniteAndNegativePixelsAreZeroExposureAndCounted)
     Scene s = small_scene();
     s.pixels[0] = std::numeric_limits<float>::quiet_NaN();
     s.pixels[4] = std::numeric_limits<float>::infinity();
-    s.pixels[9] = -1.0f;
+    s.pixels[9]  = -1.0f;
+    s.pixels[13] = std::numeric_limits<float>::denorm_min();
     RenderStats stats;
     const auto out = render(s, {}, &stats);
     EXPECT_EQ(stats.input.nonfinite_pixels, 2u);
     EXPECT_EQ(stats.input.negative_pixels, 1u);
+    EXPECT_EQ(stats.input.denormal_pixels, 1u);
     EXPECT_EQ(stats.input.pixels_read, 48u * 32u);
     for (float v : out)
         EXPECT_TRUE(std::isfinite(v));

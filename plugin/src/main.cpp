@@ -403,7 +403,8 @@ int render(const CliArgs& a, const Console& con)
     if (in.negative_pixels)
         con.warning(std::to_string(in.negative_pixels) + " of the "
                     + std::to_string(in.pixels_read)
-                    + " input pixels read have negative values: read as no exposure");
+                    + " input pixels read have a negative channel: it enters each layer's "
+                      "weighted sum as is, and a negative layer exposure counts as none");
 
     // Write, all or nothing.
     t = Clock::now();

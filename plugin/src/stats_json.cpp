@@ -35,7 +35,8 @@ std::string stats_json(const RunReport& r)
                             { "colorspace", r.input_colorspace },
                             { "pixels_read", r.render.input.pixels_read },
                             { "nonfinite_pixels", r.render.input.nonfinite_pixels },
-                            { "negative_pixels", r.render.input.negative_pixels } };
+                            { "negative_pixels", r.render.input.negative_pixels },
+                            { "denormal_pixels", r.render.input.denormal_pixels } };
     Json layers = Json::array();
     for (const LayerStats& l : r.render.layers)
         layers.push_back({ { "name", l.name },

@@ -71,7 +71,7 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert set(s["scan"]) == {"width", "height", "pitch_x_um", "pitch_y_um"}
     assert set(s["roi"]) == {"x", "y", "width", "height"}
     assert set(s["input"]) == {"file", "colorspace", "pixels_read", "nonfinite_pixels",
-                               "negative_pixels"}
+                               "negative_pixels", "denormal_pixels"}
     assert s["engine"] == "exact" and s["stock"] == "color-negative" and s["seed"] == 42
     assert s["scan"]["width"] == WIDTH and s["scan"]["height"] == HEIGHT
     assert s["scan"]["pitch_x_um"] == pytest.approx(500.0 / WIDTH)

@@ -100,6 +100,7 @@ struct InputStats {
     uint64_t pixels_read      = 0;
     uint64_t nonfinite_pixels = 0;  ///< a NaN or Inf channel: zero exposure
     uint64_t negative_pixels  = 0;  ///< a negative channel (negative v: zero)
+    uint64_t denormal_pixels  = 0;  ///< a subnormal channel (used as is)
 };
 
 /// Statistics of a render, for --stats and tests.
