@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "filmgrain/stock.h"
 
@@ -26,6 +27,10 @@ public:
     double develop_probability(uint64_t n4) const { return 1.0 - survival_probability(n4); }
     /// The outcome for uniform u in [0, 1): develops iff u >= 1 - P.
     bool develops(uint64_t n4, double u) const { return u >= survival_probability(n4); }
+    /// The smallest n4 with which a grain holding uniform u develops:
+    /// develops(n4, u) == (n4 >= n4_needed(u)) for every n4 (survival falls
+    /// with n4). UINT64_MAX when no n4 suffices (d = 0 and u below 1 - f).
+    uint64_t n4_needed(double u) const;
 
 private:
     double m_fog_exponent = 0.0;  ///< t / fog_tau

@@ -2,6 +2,9 @@
 #include "development.h"
 
 #include <cmath>
+#include <limits>
+
+#include "rng.h"
 
 #include <gtest/gtest.h>
 
@@ -39,6 +42,22 @@ TEST(Development, LimitsOfEfficiency)
     EXPECT_EQ(full.develop_probability(1), 1.0);
     EXPECT_NEAR(full.fog_probability(), 1e-23, 1e-36);
     EXPECT_EQ(full.develop_probability(uint64_t(1) << 62), 1.0);
+}
+
+TEST(Development, NeededCentresAgreeWithDevelops)
+{
+    Stock stock;
+    const Development dev(stock);
+    Rng rng(3, Stage::development);
+    for (int i = 0; i < 100000; ++i) {
+        const double u   = rng.uniform();
+        const uint64_t k = dev.n4_needed(u);
+        ASSERT_LT(k, 1000u);
+        for (uint64_t n : { uint64_t(0), k > 0 ? k - 1 : 0, k, k + 1, k + 5 })
+            ASSERT_EQ(dev.develops(n, u), n >= k) << "u " << u << " n " << n << " k " << k;
+    }
+    stock.development_time_s = 0;  // d = 0, f = 0: nothing ever develops
+    EXPECT_EQ(Development(stock).n4_needed(0.5), std::numeric_limits<uint64_t>::max());
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -186,6 +187,309 @@ double union_coverage_um2(const Disc* discs, size_t count, double x0_um, double 
     }
     area += 0.5 * (w * union_length(right, h) + h * union_length(top, w));
     return std::clamp(area, 0.0, w * h);
+}
+
+void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64_t x1,
+                       int64_t y1, double px_um, double py_um, int samples,
+                       ScanlineScratch& scratch, double* fraction)
+{
+    const int64_t tw = x1 - x0, th = y1 - y0;
+    const int64_t rows = th * samples;          // sub-scanlines of the block
+    const int64_t g0   = y0 * samples;          // global index of the first
+    const double h     = py_um / samples;       // sub-scanline spacing
+    std::fill(fraction, fraction + tw * th, 0.0);
+    auto& offsets = scratch.offsets;
+    auto& chords  = scratch.chords;
+    auto& fill    = scratch.fill;
+    // Sub-scanlines a disc crosses: (g + 0.5) h in (y - r, y + r).
+    const auto crossing = [&](const Disc& d, int64_t& ga, int64_t& gb) {
+        ga = std::max<int64_t>(g0, static_cast<int64_t>(std::ceil((d.y_um - d.r_um) / h - 0.5)));
+        gb = std::min<int64_t>(g0 + rows - 1,
+                               static_cast<int64_t>(std::floor((d.y_um + d.r_um) / h - 0.5)));
+    };
+    offsets.assign(static_cast<size_t>(rows + 1), 0);
+    for (const Disc& d : discs) {
+        int64_t ga, gb;
+        crossing(d, ga, gb);
+        for (int64_t g = ga; g <= gb; ++g)
+            ++offsets[static_cast<size_t>(g - g0 + 1)];
+    }
+    for (size_t i = 1; i < offsets.size(); ++i)
+        offsets[i] += offsets[i - 1];
+    chords.resize(offsets.back());
+    fill.assign(offsets.begin(), offsets.end() - 1);
+    for (const Disc& d : discs) {
+        int64_t ga, gb;
+        crossing(d, ga, gb);
+        for (int64_t g = ga; g <= gb; ++g) {
+            const double dy   = (static_cast<double>(g) + 0.5) * h - d.y_um;
+            const double half = std::sqrt(std::max(0.0, d.r_um * d.r_um - dy * dy));
+            chords[fill[static_cast<size_t>(g - g0)]++] = { d.x_um - half, d.x_um + half };
+        }
+    }
+    // Each sub-scanline: sort its chords, merge, and deposit the covered
+    // lengths into the pixels they cross, in increasing x.
+    const double left = static_cast<double>(x0) * px_um, right = static_cast<double>(x1) * px_um;
+    const double weight = 1.0 / (px_um * samples);
+    for (int64_t r = 0; r < rows; ++r) {
+        auto first = chords.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<size_t>(r)]);
+        auto last  = chords.begin() + static_cast<std::ptrdiff_t>(offsets[static_cast<size_t>(r + 1)]);
+        if (first == last)
+            continue;
+        std::sort(first, last);
+        double* row = fraction + (r / samples) * tw;
+        const auto deposit = [&](double a, double b) {
+            a = std::max(a, left);
+            b = std::min(b, right);
+            if (!(b > a))
+                return;
+            int64_t i = std::max<int64_t>(x0, static_cast<int64_t>(std::floor(a / px_um)));
+            for (; i < x1; ++i) {
+                const double pa = static_cast<double>(i) * px_um;
+                const double pb = static_cast<double>(i + 1) * px_um;
+                if (pa >= b)
+                    break;
+                row[i - x0] += (std::min(b, pb) - std::max(a, pa)) * weight;
+            }
+        };
+        double a = first->first, b = first->second;
+        for (auto it = first + 1; it != last; ++it) {
+            if (it->first <= b) {
+                b = std::max(b, it->second);
+            } else {
+                deposit(a, b);
+                a = it->first;
+                b = it->second;
+            }
+        }
+        deposit(a, b);
+    }
+    for (int64_t i = 0; i < tw * th; ++i)
+        fraction[i] = std::min(fraction[i], 1.0);
+}
+
+namespace {
+
+/// Appends to `out` the angular intervals of circle i hidden inside other
+/// discs (candidates: indices into discs). Returns false if the whole
+/// circle is hidden.
+bool hidden_arcs(const std::vector<Disc>& discs, size_t i, const size_t* candidates,
+                 size_t ncandidates, ArcSet& out)
+{
+    const Disc& di = discs[i];
+    out.clear();
+    for (size_t k = 0; k < ncandidates && !out.all; ++k) {
+        const size_t j = candidates[k];
+        if (j == i)
+            continue;
+        const Disc& dj    = discs[j];
+        const double dx   = dj.x_um - di.x_um, dy = dj.y_um - di.y_um;
+        const double rsum = di.r_um + dj.r_um;
+        const double d2   = dx * dx + dy * dy;
+        if (d2 >= rsum * rsum)
+            continue;  // apart
+        const double dist = std::sqrt(d2);
+        if (dist + di.r_um <= dj.r_um) {
+            // i lies inside j; of two identical discs the later is hidden.
+            if (di.r_um < dj.r_um || dist > 0.0 || j < i)
+                out.all = true;
+            continue;
+        }
+        if (dist + dj.r_um <= di.r_um)
+            continue;  // j lies inside i
+        const double c = (di.r_um * di.r_um + dist * dist - dj.r_um * dj.r_um)
+                         / (2.0 * di.r_um * dist);
+        out.exclude(std::atan2(dy, dx), std::acos(std::clamp(c, -1.0, 1.0)));
+    }
+    return !out.all;
+}
+
+}  // namespace
+
+void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64_t x1,
+                   int64_t y1, double px_um, double py_um, GridCoverageScratch& scratch,
+                   double* fraction)
+{
+    const int64_t tw = x1 - x0, th = y1 - y0;
+    auto& area = scratch.area;
+    area.assign(static_cast<size_t>(tw * th), 0.0);
+    const auto col = [&](double x) { return static_cast<int64_t>(std::floor(x / px_um)); };
+    const auto row = [&](double y) { return static_cast<int64_t>(std::floor(y / py_um)); };
+
+    // 1. Bucket the discs by the pixels their bounding boxes touch, to find
+    //    each disc's neighbours without testing every pair.
+    auto& offsets = scratch.cell_offsets;
+    auto& fill    = scratch.cell_fill;
+    auto& members = scratch.cell_discs;
+    offsets.assign(static_cast<size_t>(tw * th + 1), 0);
+    const auto for_cells = [&](const Disc& d, auto&& f) {
+        const int64_t cx0 = std::max(x0, col(d.x_um - d.r_um)), cx1 = std::min(x1 - 1, col(d.x_um + d.r_um));
+        const int64_t cy0 = std::max(y0, row(d.y_um - d.r_um)), cy1 = std::min(y1 - 1, row(d.y_um + d.r_um));
+        for (int64_t cy = cy0; cy <= cy1; ++cy)
+            for (int64_t cx = cx0; cx <= cx1; ++cx)
+                f(static_cast<size_t>((cy - y0) * tw + (cx - x0)));
+    };
+    for (const Disc& d : discs)
+        for_cells(d, [&](size_t c) { ++offsets[c + 1]; });
+    for (size_t c = 1; c < offsets.size(); ++c)
+        offsets[c] += offsets[c - 1];
+    members.resize(offsets.back());
+    fill.assign(offsets.begin(), offsets.end() - 1);
+    for (size_t i = 0; i < discs.size(); ++i)
+        for_cells(discs[i], [&](size_t c) { members[fill[c]++] = i; });
+
+    // 2. Visible arcs of each disc, cut where the circle crosses the pixel
+    //    grid; each piece lies in one pixel and adds its Green term there
+    //    (in the pixel's own coordinates, so its left and bottom edges add
+    //    nothing below).
+    auto& stamp = scratch.stamp;
+    stamp.assign(discs.size(), SIZE_MAX);
+    std::vector<size_t> candidates;
+    ArcSet hidden;
+    auto& crossings = scratch.crossings;
+    for (size_t i = 0; i < discs.size(); ++i) {
+        const Disc& d = discs[i];
+        candidates.clear();
+        for_cells(d, [&](size_t c) {
+            for (size_t k = offsets[c]; k < offsets[c + 1]; ++k)
+                if (stamp[members[k]] != i) {
+                    stamp[members[k]] = i;
+                    candidates.push_back(members[k]);
+                }
+        });
+        // (The candidates' order does not matter: the hidden intervals are
+        // sorted before use, and ties between identical discs are broken by
+        // index.)
+        if (!hidden_arcs(discs, i, candidates.data(), candidates.size(), hidden))
+            continue;
+        // Angles where the circle meets grid lines inside the block's span.
+        crossings.clear();
+        const auto add_line = [&](double offset, double phase) {
+            const double t = offset / d.r_um;
+            if (!(t > -1.0 && t < 1.0))
+                return;
+            const double a = std::acos(t);
+            for (double th : { phase + a, phase - a }) {
+                th -= 2.0 * M_PI * std::floor(th / (2.0 * M_PI));
+                crossings.push_back(th);
+            }
+        };
+        for (int64_t k = std::max(x0, col(d.x_um - d.r_um)); k <= std::min(x1, col(d.x_um + d.r_um) + 1); ++k)
+            add_line(static_cast<double>(k) * px_um - d.x_um, 0.0);
+        for (int64_t m = std::max(y0, row(d.y_um - d.r_um)); m <= std::min(y1, row(d.y_um + d.r_um) + 1); ++m)
+            add_line(static_cast<double>(m) * py_um - d.y_um, 0.5 * M_PI);
+        crossings.push_back(0.0);
+        crossings.push_back(2.0 * M_PI);
+        std::sort(crossings.begin(), crossings.end());
+        // Visible = gaps between the hidden intervals.
+        auto& arcs = hidden.arcs;
+        std::sort(arcs.begin(), arcs.end());
+        const auto emit = [&](double a, double b) {
+            // Cut [a, b] at the crossings; deposit each piece.
+            auto it = std::upper_bound(crossings.begin(), crossings.end(), a);
+            double lo = a;
+            while (lo < b) {
+                const double hi = (it != crossings.end() && *it < b) ? *it++ : b;
+                if (hi > lo) {
+                    const double mid = 0.5 * (lo + hi);
+                    const int64_t ix = col(d.x_um + d.r_um * std::cos(mid));
+                    const int64_t iy = row(d.y_um + d.r_um * std::sin(mid));
+                    if (ix >= x0 && ix < x1 && iy >= y0 && iy < y1)
+                        area[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
+                            += arc_term(d.x_um - static_cast<double>(ix) * px_um,
+                                        d.y_um - static_cast<double>(iy) * py_um, d.r_um, lo, hi);
+                }
+                lo = hi;
+            }
+        };
+        double cursor = 0.0;
+        for (const auto& [a, b] : arcs) {
+            if (a > cursor)
+                emit(cursor, a);
+            cursor = std::max(cursor, b);
+        }
+        if (cursor < 2.0 * M_PI)
+            emit(cursor, 2.0 * M_PI);
+    }
+
+    // 3. Grid lines inside the union: each pixel's right edge (x = x_i+1,
+    //    upwards: 1/2 px L) and top edge (y = y_j+1, leftwards: 1/2 py L).
+    //    Lines 0..tw-1 are the verticals x = (x0+1+k) px, then th horizontals.
+    auto& loff   = scratch.line_offsets;
+    auto& lfill  = scratch.line_fill;
+    auto& chords = scratch.line_chords;
+    const size_t nlines = static_cast<size_t>(tw + th);
+    const auto for_lines = [&](const Disc& d, auto&& f) {
+        for (int64_t k = std::max(x0 + 1, col(d.x_um - d.r_um)); k <= std::min(x1, col(d.x_um + d.r_um) + 1); ++k) {
+            const double e = static_cast<double>(k) * px_um - d.x_um;
+            if (e * e < d.r_um * d.r_um) {
+                const double h = std::sqrt(d.r_um * d.r_um - e * e);
+                f(static_cast<size_t>(k - x0 - 1), d.y_um - h, d.y_um + h);
+            }
+        }
+        for (int64_t m = std::max(y0 + 1, row(d.y_um - d.r_um)); m <= std::min(y1, row(d.y_um + d.r_um) + 1); ++m) {
+            const double e = static_cast<double>(m) * py_um - d.y_um;
+            if (e * e < d.r_um * d.r_um) {
+                const double h = std::sqrt(d.r_um * d.r_um - e * e);
+                f(static_cast<size_t>(tw + (m - y0 - 1)), d.x_um - h, d.x_um + h);
+            }
+        }
+    };
+    loff.assign(nlines + 1, 0);
+    for (const Disc& d : discs)
+        for_lines(d, [&](size_t line, double, double) { ++loff[line + 1]; });
+    for (size_t l = 1; l < loff.size(); ++l)
+        loff[l] += loff[l - 1];
+    chords.resize(loff.back());
+    lfill.assign(loff.begin(), loff.end() - 1);
+    for (const Disc& d : discs)
+        for_lines(d, [&](size_t line, double a, double b) { chords[lfill[line]++] = { a, b }; });
+    for (size_t l = 0; l < nlines; ++l) {
+        auto first = chords.begin() + static_cast<std::ptrdiff_t>(loff[l]);
+        auto last  = chords.begin() + static_cast<std::ptrdiff_t>(loff[l + 1]);
+        if (first == last)
+            continue;
+        std::sort(first, last);
+        const bool vertical = l < static_cast<size_t>(tw);
+        // Along a vertical line the pixels are rows y0..y1; along a
+        // horizontal one, columns x0..x1.
+        const double step   = vertical ? py_um : px_um;
+        const int64_t lo_ix = vertical ? y0 : x0, hi_ix = vertical ? y1 : x1;
+        const double factor = 0.5 * (vertical ? px_um : py_um);
+        const auto deposit  = [&](double a, double b) {
+            a = std::max(a, static_cast<double>(lo_ix) * step);
+            b = std::min(b, static_cast<double>(hi_ix) * step);
+            if (!(b > a))
+                return;
+            for (int64_t i = std::max(lo_ix, static_cast<int64_t>(std::floor(a / step))); i < hi_ix; ++i) {
+                // Both ends as index * step, as the clip above: pa + step
+                // would round differently from the next pixel's pa.
+                const double pa = static_cast<double>(i) * step;
+                const double pb = static_cast<double>(i + 1) * step;
+                if (pa >= b)
+                    break;
+                const double len = std::min(b, pb) - std::max(a, pa);
+                const size_t at  = vertical ? static_cast<size_t>((i - y0) * tw + static_cast<int64_t>(l))
+                                            : static_cast<size_t>((static_cast<int64_t>(l) - tw) * tw + (i - x0));
+                area[at] += factor * len;
+            }
+        };
+        double a = first->first, b = first->second;
+        for (auto it = first + 1; it != last; ++it) {
+            if (it->first <= b) {
+                b = std::max(b, it->second);
+            } else {
+                deposit(a, b);
+                a = it->first;
+                b = it->second;
+            }
+        }
+        deposit(a, b);
+    }
+
+    const double pixel_um2 = px_um * py_um;
+    for (size_t i = 0; i < area.size(); ++i)
+        fraction[i] = std::clamp(area[i] / pixel_um2, 0.0, 1.0);
 }
 
 double density_from_transmittance(double transmittance, double max_density,

@@ -13,7 +13,8 @@ double rate_scale_for_area(double area_um2, double mean_area_um2, double rate_ar
 }
 
 LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
-                                  const KineticsRates& rates, Rng& rng, uint64_t* events)
+                                  const KineticsRates& rates, Rng& rng, uint64_t* events,
+                                  uint64_t stop_at_n4)
 {
     LatentImage c;
     uint64_t e         = 0;  // free electrons
@@ -84,6 +85,10 @@ LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
             } else if (which < static_cast<double>(c.n2 + c.n3) || c.n4 == 0) {
                 --c.n3;
                 ++c.n4;
+                if (c.n4 >= stop_at_n4) {
+                    --e;
+                    break;  // decided: the outcome cannot change any more
+                }
             }
             // else: a 4+-centre grows and stays a 4+-centre.
             --e;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "rng.h"
 
@@ -42,8 +43,16 @@ double rate_scale_for_area(double area_um2, double mean_area_um2, double rate_ar
 /// hang. Time is tracked only as the gap to the next arrival, so shutters
 /// from 1e-9 s to 1e6 s keep events correctly ordered. Deterministic given
 /// the stream. `events` (optional) receives the number of chain events.
+///
+/// `stop_at_n4`: n4 never decreases, so once it reaches a value at which
+/// the grain's development is decided the rest of the chain cannot change
+/// the outcome. The chain then stops with n4 == stop_at_n4 (n2, n3 are the
+/// counts at that moment). The trajectory up to that point is the one the
+/// full chain takes with the same stream, so "n4 >= k" is decided exactly as
+/// by the full chain. Default: run to the end.
 LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
                                   const KineticsRates& rates, Rng& rng,
-                                  uint64_t* events = nullptr);
+                                  uint64_t* events     = nullptr,
+                                  uint64_t stop_at_n4 = std::numeric_limits<uint64_t>::max());
 
 }  // namespace filmgrain

@@ -8,10 +8,12 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <limits>
 #include <mutex>
 #include <thread>
 
 #include "development.h"
+#include "engine_plan.h"
 #include "exposure.h"
 #include "geometry.h"
 #include "image_formation.h"
@@ -36,17 +38,89 @@ const char* engine_name(Engine engine)
 {
     switch (engine) {
     case Engine::exact: return "exact";
+    case Engine::fast: return "fast";
+    case Engine::automatic: return "auto";
     }
     return "unknown";
 }
 
+const char* kinetics_method_name(KineticsMethod method)
+{
+    switch (method) {
+    case KineticsMethod::chain: return "chain";
+    case KineticsMethod::early_stop: return "early";
+    case KineticsMethod::table: return "table";
+    }
+    return "unknown";
+}
+
+const char* exposure_method_name(ExposureMethod method)
+{
+    return method == ExposureMethod::disc ? "disc" : "centre";
+}
+
+const char* coverage_method_name(CoverageMethod method)
+{
+    return method == CoverageMethod::exact ? "exact" : "scanline";
+}
+
+std::vector<std::string> engine_names() { return { "auto", "exact", "fast" }; }
+
+namespace {
+
+template<typename E, size_t N>
+bool parse_by_name(const std::string& name, const E (&values)[N], const char* (*to_name)(E),
+                   E& out)
+{
+    for (E v : values)
+        if (name == to_name(v)) {
+            out = v;
+            return true;
+        }
+    return false;
+}
+
+}  // namespace
+
 bool parse_engine(const std::string& name, Engine& out)
 {
-    if (name == "exact") {
-        out = Engine::exact;
-        return true;
-    }
-    return false;
+    constexpr Engine all[] = { Engine::exact, Engine::fast, Engine::automatic };
+    return parse_by_name(name, all, engine_name, out);
+}
+
+bool parse_kinetics_method(const std::string& name, KineticsMethod& out)
+{
+    constexpr KineticsMethod all[]
+        = { KineticsMethod::chain, KineticsMethod::early_stop, KineticsMethod::table };
+    return parse_by_name(name, all, kinetics_method_name, out);
+}
+
+bool parse_exposure_method(const std::string& name, ExposureMethod& out)
+{
+    constexpr ExposureMethod all[] = { ExposureMethod::disc, ExposureMethod::centre };
+    return parse_by_name(name, all, exposure_method_name, out);
+}
+
+bool parse_coverage_method(const std::string& name, CoverageMethod& out)
+{
+    constexpr CoverageMethod all[] = { CoverageMethod::exact, CoverageMethod::scanline };
+    return parse_by_name(name, all, coverage_method_name, out);
+}
+
+Status RenderSettings::validate() const
+{
+    if (!(tolerance > 0.0 && tolerance <= 1.0))
+        return Status::errorf("tolerance = ", tolerance, ": must be in (0, 1]");
+    if (coverage_samples < 0 || coverage_samples > 256)
+        return Status::errorf("coverage samples = ", coverage_samples, ": must be in [0, 256]");
+    if (tile_size_px < 1 || tile_size_px > 4096)
+        return Status::errorf("tile size = ", tile_size_px, ": must be in [1, 4096]");
+    if (nthreads < 0)
+        return Status::errorf("nthreads = ", nthreads, ": must be >= 0");
+    if (engine == Engine::exact && (kinetics || exposure_method || coverage || coverage_samples))
+        return Status::error("the exact engine is the reference: its kinetics, exposure and "
+                             "coverage methods cannot be overridden (use engine=fast or auto)");
+    return {};
 }
 
 Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
@@ -69,71 +143,43 @@ Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t in
 
 namespace {
 
-/// Everything a tile needs to know about one population, prepared once.
-struct PopulationPlan {
-    PopulationGrains grains;
-    /// Mean absorbed photons per (value x square micrometre):
-    /// quantum_efficiency * 4.09e3 * H per unit value (MODEL.md 2).
-    double photons_per_value_um2;
-    KineticsRates rates;
-    double rate_area_exponent;
-};
-
-struct LayerPlan {
-    LayerExposure exposure;
-    std::vector<PopulationPlan> populations;
-};
-
 /// Counters of one layer, summed over tiles (integers: order-independent).
 struct LayerCounters {
-    std::atomic<uint64_t> grains { 0 }, developed { 0 }, photons { 0 }, events { 0 };
+    std::atomic<uint64_t> grains { 0 }, developed { 0 }, photons { 0 }, events { 0 },
+        decided_early { 0 };
 };
 
 /// Per-worker scratch buffers, reused from tile to tile.
 struct TileScratch {
-    std::vector<Disc> discs, bucketed;
-    std::vector<size_t> offsets, fill;
+    std::vector<Disc> discs;
+    std::vector<double> fraction;
+    GridCoverageScratch grid;
+    ScanlineScratch scanline;
 };
 
-/// The exact engine: a read-only plan shared by all workers, plus counters
-/// that the workers add to (integers, so the order does not matter).
-class ExactRenderer {
+/// What happened to one grain.
+struct GrainOutcome {
+    bool developed         = false;
+    bool decided_early     = false;
+    uint64_t photons       = 0;
+    uint64_t events        = 0;
+};
+
+/// Renders tiles with the paths of a plan. The plan is read-only and shared
+/// by all workers; the counters are atomics.
+class TileRenderer {
 public:
-    ExactRenderer(const Stock& stock, const SceneSettings& scene, const ImageView& input,
-                  const FrameGeometry& frame, const Roi& roi, float* out)
+    TileRenderer(const Stock& stock, const SceneSettings& scene, const FrameGeometry& frame,
+                 const Roi& roi, const std::vector<LayerPlan>& layers, float* out)
         : m_stock(stock)
         , m_scene(scene)
         , m_frame(frame)
         , m_roi(roi)
+        , m_layers(layers)
         , m_out(out)
         , m_development(stock)
         , m_counters(stock.layers.size())
     {
-        const double lxs_per_value = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs,
-                                                                 scene.exposure_stops);
-        for (size_t l = 0; l < stock.layers.size(); ++l) {
-            const Layer& layer = stock.layers[l];
-            LayerPlan plan { LayerExposure(input, layer.sensitivity, frame.input_pitch_um), {} };
-            for (size_t p = 0; p < layer.populations.size(); ++p) {
-                const Population& pop = layer.populations[p];
-                plan.populations.push_back(
-                    { PopulationGrains(pop, scene.seed, static_cast<uint32_t>(l),
-                                       static_cast<uint32_t>(p)),
-                      pop.quantum_efficiency * kPhotonsPerUm2PerLxs * lxs_per_value,
-                      { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
-                      pop.rate_area_exponent });
-            }
-            m_layers.push_back(std::move(plan));
-        }
-    }
-
-    double max_radius_um() const
-    {
-        double r = 0.0;
-        for (const auto& layer : m_layers)
-            for (const auto& pop : layer.populations)
-                r = std::max(r, pop.grains.max_radius_um());
-        return r;
     }
 
     /// Renders the scan pixels [x0, x1) x [y0, y1) of every layer.
@@ -141,24 +187,25 @@ public:
     {
         const RectUm rect = m_frame.scan_rect(x0, y0, x1, y1);
         for (size_t l = 0; l < m_layers.size(); ++l) {
+            const LayerPlan& layer = m_layers[l];
             scratch.discs.clear();
-            uint64_t grains = 0, developed = 0, photons = 0, events = 0;
-            for (const PopulationPlan& pop : m_layers[l].populations) {
+            uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
+            for (const PopulationPlan& pop : layer.populations) {
                 pop.grains.for_each_grain_near(rect, [&](const Grain& g) {
                     const Disc disc { g.x_um, g.y_um, g.radius_um };
                     if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                         return;
-                    uint64_t n = 0, ev = 0;
-                    const bool dev = simulate_grain(m_layers[l], pop, g, n, ev);
+                    const GrainOutcome o = simulate_grain(layer, pop, g);
                     // Count each grain once: in the tile holding its centre.
                     if (g.x_um >= rect.x0_um && g.x_um < rect.x1_um && g.y_um >= rect.y0_um
                         && g.y_um < rect.y1_um) {
                         ++grains;
-                        developed += dev;
-                        photons += n;
-                        events += ev;
+                        developed += o.developed;
+                        photons += o.photons;
+                        events += o.events;
+                        early += o.decided_early;
                     }
-                    if (dev)
+                    if (o.developed)
                         scratch.discs.push_back(disc);
                 });
             }
@@ -167,14 +214,18 @@ public:
             c.developed += developed;
             c.photons += photons;
             c.events += events;
-            write_densities(scratch, l, x0, y0, x1, y1);
+            c.decided_early += early;
+            if (layer.coverage == CoverageMethod::exact)
+                write_exact_densities(scratch, l, x0, y0, x1, y1);
+            else
+                write_scanline_densities(scratch, l, x0, y0, x1, y1);
         }
     }
 
     void fill_stats(RenderStats& stats) const
     {
         stats.layers.clear();
-        const size_t nl = m_stock.layers.size();
+        const size_t nl    = m_stock.layers.size();
         const int64_t npix = m_roi.npixels();
         for (size_t l = 0; l < nl; ++l) {
             LayerStats ls;
@@ -183,6 +234,11 @@ public:
             ls.developed        = m_counters[l].developed;
             ls.absorbed_photons = m_counters[l].photons;
             ls.kinetics_events  = m_counters[l].events;
+            ls.decided_early    = m_counters[l].decided_early;
+            ls.path             = m_layers[l].path;
+            ls.reason           = m_layers[l].reason;
+            ls.error_estimate   = m_layers[l].error_estimate;
+            ls.setup_seconds    = m_layers[l].setup_seconds;
             // Fixed summation order (row-major): deterministic.
             double sum = 0.0;
             for (int64_t i = 0; i < npix; ++i)
@@ -193,107 +249,131 @@ public:
     }
 
 private:
-    /// MODEL.md 2-4 for one grain: absorbed photons, latent image,
-    /// development. Returns whether it develops.
-    bool simulate_grain(const LayerPlan& layer, const PopulationPlan& pop, const Grain& g,
-                        uint64_t& photons, uint64_t& events) const
+    /// Mean absorbed photons of a grain (MODEL.md 2).
+    double photon_mean(const LayerPlan& layer, const PopulationPlan& pop, const Grain& g) const
     {
-        const double mean = pop.photons_per_value_um2
-                            * layer.exposure.integrate_over_disc(g.x_um, g.y_um, g.radius_um);
-        Rng photon_rng(g.id, Stage::photons);
-        photons = sample_poisson(mean, photon_rng);
-        LatentImage latent;
-        // Fewer than four electrons cannot build a 4-centre: n4 = 0 exactly,
-        // so the chain need not run (its other outcomes are not observed).
-        if (photons >= 4) {
-            const double area  = M_PI * g.radius_um * g.radius_um;
-            const double scale = rate_scale_for_area(area, pop.grains.mean_area_um2(),
-                                                     pop.rate_area_exponent);
-            const KineticsRates rates { pop.rates.k_pair_per_s * scale,
-                                        pop.rates.k_join_per_s * scale,
-                                        pop.rates.k_loss_per_s * scale };
-            Rng kinetics_rng(g.id, Stage::kinetics);
-            latent = simulate_latent_image(photons, m_scene.shutter_s, rates, kinetics_rng,
-                                           &events);
-        }
-        Rng development_rng(g.id, Stage::development);
-        return m_development.develops(latent.n4, development_rng.uniform());
+        const double integral
+            = pop.exposure == ExposureMethod::disc
+                  ? layer.exposure.integrate_over_disc(g.x_um, g.y_um, g.radius_um)
+                  : layer.exposure.value_at(g.x_um, g.y_um) * M_PI * g.radius_um * g.radius_um;
+        return pop.photons_per_value_um2 * integral;
     }
 
-    /// MODEL.md 5: exact coverage of each scan pixel by the developed discs.
-    void write_densities(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0,
-                         int64_t x1, int64_t y1) const
+    KineticsRates scaled_rates(const PopulationPlan& pop, const Grain& g) const
     {
-        auto& offsets  = scratch.offsets;
-        auto& bucketed = scratch.bucketed;
-        auto& fill     = scratch.fill;
-        const int64_t tw = x1 - x0, th = y1 - y0;
-        const double px = m_frame.scan_pitch_x_um, py = m_frame.scan_pitch_y_um;
-        // Bucket the discs by the pixels they touch, keeping their order.
-        offsets.assign(static_cast<size_t>(tw * th + 1), 0);
-        const auto for_each_pixel = [&](const Disc& d, auto&& f) {
-            const int64_t ix0 = std::max<int64_t>(x0, static_cast<int64_t>(std::floor((d.x_um - d.r_um) / px)));
-            const int64_t ix1 = std::min<int64_t>(x1 - 1, static_cast<int64_t>(std::floor((d.x_um + d.r_um) / px)));
-            const int64_t iy0 = std::max<int64_t>(y0, static_cast<int64_t>(std::floor((d.y_um - d.r_um) / py)));
-            const int64_t iy1 = std::min<int64_t>(y1 - 1, static_cast<int64_t>(std::floor((d.y_um + d.r_um) / py)));
-            for (int64_t iy = iy0; iy <= iy1; ++iy)
-                for (int64_t ix = ix0; ix <= ix1; ++ix)
-                    if (disc_touches_rect(d, ix * px, iy * py, (ix + 1) * px, (iy + 1) * py))
-                        f(static_cast<size_t>((iy - y0) * tw + (ix - x0)));
-        };
-        for (const Disc& d : scratch.discs)
-            for_each_pixel(d, [&](size_t i) { ++offsets[i + 1]; });
-        for (size_t i = 1; i < offsets.size(); ++i)
-            offsets[i] += offsets[i - 1];
-        bucketed.resize(offsets.back());
-        fill.assign(offsets.begin(), offsets.end() - 1);
-        for (const Disc& d : scratch.discs)
-            for_each_pixel(d, [&](size_t i) { bucketed[fill[i]++] = d; });
+        const double area  = M_PI * g.radius_um * g.radius_um;
+        const double scale = rate_scale_for_area(area, pop.grains.mean_area_um2(),
+                                                 pop.rate_area_exponent);
+        return { pop.rates.k_pair_per_s * scale, pop.rates.k_join_per_s * scale,
+                 pop.rates.k_loss_per_s * scale };
+    }
 
-        const size_t nl       = m_stock.layers.size();
-        const double pixel_um2 = px * py;
-        for (int64_t iy = y0; iy < y1; ++iy)
-            for (int64_t ix = x0; ix < x1; ++ix) {
-                const size_t i = static_cast<size_t>((iy - y0) * tw + (ix - x0));
-                const double covered
-                    = union_coverage_um2(bucketed.data() + offsets[i],
-                                         offsets[i + 1] - offsets[i], ix * px, iy * py,
-                                         (ix + 1) * px, (iy + 1) * py);
-                const double t = 1.0 - covered / pixel_um2;
-                const size_t o = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
-                                                     + (ix - m_roi.x_begin));
-                m_out[o * nl + layer] = static_cast<float>(
-                    density_from_transmittance(t, m_stock.max_density, m_stock.base_density));
+    /// MODEL.md 2-4 for one grain: absorbed photons, latent image,
+    /// development, by the population's methods. Every random value comes
+    /// from the grain's own streams, one per stage.
+    GrainOutcome simulate_grain(const LayerPlan& layer, const PopulationPlan& pop,
+                                const Grain& g) const
+    {
+        GrainOutcome o;
+        Rng development_rng(g.id, Stage::development);
+        const double u = development_rng.uniform();
+        if (pop.kinetics == KineticsMethod::chain) {
+            // The reference: every photon and event, then development.
+            Rng photon_rng(g.id, Stage::photons);
+            o.photons = sample_poisson(photon_mean(layer, pop, g), photon_rng);
+            LatentImage latent;
+            // Fewer than four electrons cannot build a 4-centre: n4 = 0
+            // exactly, so the chain need not run.
+            if (o.photons >= 4) {
+                Rng kinetics_rng(g.id, Stage::kinetics);
+                latent = simulate_latent_image(o.photons, m_scene.shutter_s, scaled_rates(pop, g),
+                                               kinetics_rng, &o.events);
             }
+            o.developed = m_development.develops(latent.n4, u);
+            return o;
+        }
+        // Both faster paths first ask whether u alone decides: every grain
+        // develops with probability at least f (the fog), i.e. whenever
+        // u >= 1 - f, whatever its photons.
+        const uint64_t needed = m_development.n4_needed(u);
+        if (needed == 0) {
+            o.developed = o.decided_early = true;
+            return o;
+        }
+        Rng photon_rng(g.id, Stage::photons);
+        o.photons = sample_poisson(photon_mean(layer, pop, g), photon_rng);
+        if (o.photons < 4 || needed == std::numeric_limits<uint64_t>::max())
+            return o;  // no 4-centre can form, or none would suffice
+        if (pop.kinetics == KineticsMethod::table && o.photons <= pop.table->max_photons()) {
+            o.developed = u >= 1.0 - pop.table->probability(o.photons);
+            return o;
+        }
+        // early_stop (or a grain brighter than the table): the chain runs
+        // until n4 reaches the count that decides this grain, if ever.
+        Rng kinetics_rng(g.id, Stage::kinetics);
+        const LatentImage latent = simulate_latent_image(
+            o.photons, m_scene.shutter_s, scaled_rates(pop, g), kinetics_rng, &o.events, needed);
+        o.developed = latent.n4 >= needed;
+        return o;
+    }
+
+    void store_density(size_t layer, int64_t ix, int64_t iy, double covered_fraction) const
+    {
+        const size_t nl = m_stock.layers.size();
+        const size_t o  = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
+                                             + (ix - m_roi.x_begin));
+        m_out[o * nl + layer] = static_cast<float>(density_from_transmittance(
+            1.0 - covered_fraction, m_stock.max_density, m_stock.base_density));
+    }
+
+    /// MODEL.md 5, exact: the area of each pixel covered by the union of
+    /// the developed discs (grid_coverage, equal to union_coverage_um2 of
+    /// every pixel to rounding).
+    void write_exact_densities(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0,
+                               int64_t x1, int64_t y1) const
+    {
+        const int64_t tw = x1 - x0, th = y1 - y0;
+        scratch.fraction.resize(static_cast<size_t>(tw * th));
+        grid_coverage(scratch.discs, x0, y0, x1, y1, m_frame.scan_pitch_x_um,
+                      m_frame.scan_pitch_y_um, scratch.grid, scratch.fraction.data());
+        for (int64_t iy = y0; iy < y1; ++iy)
+            for (int64_t ix = x0; ix < x1; ++ix)
+                store_density(layer, ix, iy,
+                              scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
+    }
+
+    /// MODEL.md 5 on sub-scanlines (CoverageMethod::scanline).
+    void write_scanline_densities(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0,
+                                  int64_t x1, int64_t y1) const
+    {
+        const int64_t tw = x1 - x0, th = y1 - y0;
+        scratch.fraction.resize(static_cast<size_t>(tw * th));
+        scanline_coverage(scratch.discs, x0, y0, x1, y1, m_frame.scan_pitch_x_um,
+                          m_frame.scan_pitch_y_um, m_layers[layer].coverage_samples,
+                          scratch.scanline, scratch.fraction.data());
+        for (int64_t iy = y0; iy < y1; ++iy)
+            for (int64_t ix = x0; ix < x1; ++ix)
+                store_density(layer, ix, iy,
+                              scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
     }
 
     const Stock& m_stock;
     const SceneSettings& m_scene;
     const FrameGeometry& m_frame;
     Roi m_roi;
+    const std::vector<LayerPlan>& m_layers;
     float* m_out;
     Development m_development;
-    std::vector<LayerPlan> m_layers;
     std::vector<LayerCounters> m_counters;
 };
 
 /// Counts the special input pixels the render reads.
-InputStats scan_input(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
-                      double margin_um)
+InputStats scan_input(const ImageView& input, const InputRegion& r)
 {
     InputStats s;
-    const RectUm r  = frame.scan_rect(roi.x_begin, roi.y_begin, roi.x_end, roi.y_end);
-    const double p  = frame.input_pitch_um;
-    const auto clip = [](double v, int64_t n) {
-        return std::clamp<int64_t>(static_cast<int64_t>(std::floor(v)), 0, n);
-    };
-    const int64_t x0 = clip((r.x0_um - margin_um) / p, input.width);
-    const int64_t x1 = clip((r.x1_um + margin_um) / p + 1, input.width);
-    const int64_t y0 = clip((r.y0_um - margin_um) / p, input.height);
-    const int64_t y1 = clip((r.y1_um + margin_um) / p + 1, input.height);
-    const int nc     = std::min(input.channels, 3);
-    for (int64_t y = y0; y < y1; ++y)
-        for (int64_t x = x0; x < x1; ++x) {
+    const int nc = std::min(input.channels, 3);
+    for (int64_t y = r.y0; y < r.y1; ++y)
+        for (int64_t x = r.x0; x < r.x1; ++x) {
             const float* px = input.pixel(x, y);
             bool nonfinite = false, negative = false, denormal = false;
             for (int c = 0; c < nc; ++c) {
@@ -305,8 +385,8 @@ InputStats scan_input(const ImageView& input, const FrameGeometry& frame, const 
             s.negative_pixels += negative && !nonfinite;
             s.denormal_pixels += denormal && !nonfinite;
         }
-    s.pixels_read = static_cast<uint64_t>(std::max<int64_t>(0, x1 - x0))
-                    * static_cast<uint64_t>(std::max<int64_t>(0, y1 - y0));
+    s.pixels_read = static_cast<uint64_t>(std::max<int64_t>(0, r.x1 - r.x0))
+                    * static_cast<uint64_t>(std::max<int64_t>(0, r.y1 - r.y0));
     return s;
 }
 
@@ -316,6 +396,8 @@ Status validate_request(const Stock& stock, const SceneSettings& scene, const Im
     if (Status s = stock.validate(); !s)
         return Status::errorf("stock '", stock.name, "': ", s.message());
     if (Status s = scene.validate(); !s)
+        return s;
+    if (Status s = settings.validate(); !s)
         return s;
     if (!input.pixels)
         return Status::error("input image has no pixels (null buffer)");
@@ -327,10 +409,6 @@ Status validate_request(const Stock& stock, const SceneSettings& scene, const Im
                               " channels: expected 1 (grey) or 3 or more (R, G, B first)");
     if (!density)
         return Status::error("output buffer is null");
-    if (settings.tile_size_px < 1 || settings.tile_size_px > 4096)
-        return Status::errorf("tile size = ", settings.tile_size_px, ": must be in [1, 4096]");
-    if (settings.nthreads < 0)
-        return Status::errorf("nthreads = ", settings.nthreads, ": must be >= 0");
     return {};
 }
 
@@ -358,6 +436,10 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         }
 
         const auto start = std::chrono::steady_clock::now();
+        std::vector<LayerPlan> plan;
+        if (Status s = plan_layers(stock, scene, input, frame, roi, settings, plan); !s)
+            return s;
+
         const int64_t ts = settings.tile_size_px;
         const int64_t ntx = (roi.width() + ts - 1) / ts, nty = (roi.height() + ts - 1) / ts;
         const int64_t ntiles = ntx * nty;
@@ -365,7 +447,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
                                              : static_cast<int>(std::thread::hardware_concurrency());
         nthreads = static_cast<int>(std::clamp<int64_t>(nthreads, 1, std::max<int64_t>(1, ntiles)));
 
-        ExactRenderer renderer(stock, scene, input, frame, roi, density);
+        TileRenderer renderer(stock, scene, frame, roi, plan, density);
         std::vector<TileScratch> scratch(static_cast<size_t>(nthreads));
         std::atomic<int64_t> next_tile { 0 }, tiles_done { 0 };
         std::atomic<bool> cancel { false };
@@ -378,7 +460,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
                     const int64_t x0 = roi.x_begin + (t % ntx) * ts;
                     const int64_t y0 = roi.y_begin + (t / ntx) * ts;
                     renderer.render_tile(tile_scratch, x0, y0, std::min(x0 + ts, roi.x_end),
-                                  std::min(y0 + ts, roi.y_end));
+                                         std::min(y0 + ts, roi.y_end));
                     ++tiles_done;
                 }
             } catch (const std::exception& e) {
@@ -415,7 +497,11 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (stats) {
             renderer.fill_stats(*stats);
             stats->engine = engine_name(settings.engine);
-            stats->input  = scan_input(input, frame, roi, renderer.max_radius_um());
+            double margin = 0.0;
+            for (const LayerPlan& l : plan)
+                for (const PopulationPlan& p : l.populations)
+                    margin = std::max(margin, p.grains.max_radius_um());
+            stats->input = scan_input(input, input_region(input, frame, roi, margin));
             stats->simulate_seconds
                 = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         }

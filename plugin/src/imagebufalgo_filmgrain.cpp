@@ -103,7 +103,12 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     }
 
     RenderSettings settings;
-    settings.engine       = opts.engine;
+    settings.engine           = opts.engine;
+    settings.tolerance        = opts.tolerance;
+    settings.kinetics         = opts.kinetics;
+    settings.exposure_method  = opts.exposure_method;
+    settings.coverage         = opts.coverage;
+    settings.coverage_samples = opts.coverage_samples;
     settings.scan_width   = opts.scan_width;
     settings.scan_height  = opts.scan_height;
     settings.tile_size_px = opts.tile_size_px;

@@ -234,14 +234,11 @@ bool parse_roi(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return true;
 }
 
-/// Engines the CLI knows by name (render.h has no list of them).
-constexpr Engine kEngines[] = { Engine::exact };
-
 std::string engine_list()
 {
     std::string s;
-    for (Engine e : kEngines)
-        s += std::string(s.empty() ? "" : ", ") + engine_name(e);
+    for (const std::string& e : engine_names())
+        s += std::string(s.empty() ? "" : ", ") + e;
     return s;
 }
 
@@ -253,6 +250,79 @@ bool parse_engine_value(std::string_view v, FilmgrainCommand& cmd, std::string& 
     }
     return true;
 }
+
+bool parse_tolerance(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    double t = 0.0;
+    if (!parse_double(v, t, why))
+        return false;
+    if (!(t > 0.0 && t <= 1.0)) {
+        why = "must be in (0, 1] (a density error budget)";
+        return false;
+    }
+    cmd.tolerance = t;
+    return true;
+}
+
+/// The `name|name|...` form of an enumeration, for --help and errors.
+template<typename E, size_t N>
+std::string names_of(const E (&all)[N], const char* (*to_name)(E))
+{
+    std::string s;
+    for (E e : all)
+        s += std::string(s.empty() ? "" : "|") + to_name(e);
+    return s;
+}
+
+constexpr KineticsMethod kKinetics[]
+    = { KineticsMethod::chain, KineticsMethod::early_stop, KineticsMethod::table };
+constexpr ExposureMethod kExposureMethods[] = { ExposureMethod::disc, ExposureMethod::centre };
+constexpr CoverageMethod kCoverage[] = { CoverageMethod::exact, CoverageMethod::scanline };
+
+bool parse_kinetics_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    KineticsMethod m;
+    if (!parse_kinetics_method(std::string(v), m)) {
+        why = "unknown kinetics method (known: " + names_of(kKinetics, kinetics_method_name) + ")";
+        return false;
+    }
+    cmd.kinetics = m;
+    return true;
+}
+
+bool parse_photons_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    ExposureMethod m;
+    if (!parse_exposure_method(std::string(v), m)) {
+        why = "unknown exposure sampling (known: "
+              + names_of(kExposureMethods, exposure_method_name) + ")";
+        return false;
+    }
+    cmd.exposure_method = m;
+    return true;
+}
+
+bool parse_coverage_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    CoverageMethod m;
+    if (!parse_coverage_method(std::string(v), m)) {
+        why = "unknown coverage method (known: " + names_of(kCoverage, coverage_method_name) + ")";
+        return false;
+    }
+    cmd.coverage = m;
+    return true;
+}
+
+bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    int64_t n = 0;
+    if (!parse_int_in(v, 1, 256, n, why))
+        return false;
+    cmd.coverage_samples = static_cast<int>(n);
+    return true;
+}
+
+std::string engine_choice(const char* what) { return std::string("the engine's choice (") + what + ")"; }
 
 /// RenderSettings::tile_size_px's documented range.
 constexpr int64_t kMaxTile = 4096;
@@ -309,9 +379,30 @@ const Modifier kModifiers[] = {
       default_scan, parse_scan },
     { "roi", "X,Y,W,H", "region of the scan to render, scan pixels (must lie inside the scan)",
       default_roi, parse_roi },
-    { "engine", "NAME", "simulation engine",
+    { "engine", "auto|exact|fast",
+      "simulation engine: exact is the reference (every photon and event, exact coverage); "
+      "auto runs the paths the scene needs within the tolerance; fast the fastest paths",
       [](const FilmgrainCommand& d) { return std::string(engine_name(d.engine)); },
       parse_engine_value },
+    { "tolerance", "D", "density error budget of the approximate paths (auto), (0, 1]",
+      [](const FilmgrainCommand& d) { return format_number(d.tolerance); }, parse_tolerance },
+    { "kinetics", "chain|early|table",
+      "expert override (not with engine=exact): chain = every event; early = the chain until "
+      "the grain's fate is decided (exact); table = P(develop|N) tabulated per scene",
+      [](const FilmgrainCommand&) { return engine_choice("table"); }, parse_kinetics_value },
+    { "photons", "disc|centre",
+      "expert override: exposure integrated over each grain's disc, or sampled at its centre",
+      [](const FilmgrainCommand&) { return engine_choice("disc; fast: centre"); },
+      parse_photons_value },
+    { "coverage", "exact|scanline",
+      "expert override: exact pixel coverage, or chord unions on sub-scanlines",
+      [](const FilmgrainCommand&) { return engine_choice("exact; fast: scanline"); },
+      parse_coverage_value },
+    { "samples", "N", "sub-scanlines per pixel row for scanline coverage, [1, 256]",
+      [](const FilmgrainCommand&) {
+          return engine_choice("2 chords per smallest mean grain radius");
+      },
+      parse_samples },
     { "tile", "N", "work tile side in scan pixels, [1, 4096]; speed only, never the output",
       [](const FilmgrainCommand& d) { return std::to_string(d.tile_size_px); }, parse_tile },
 };

@@ -120,7 +120,14 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:shutter=1/0", { "shutter=1/0", "division by zero", "SECONDS" } },
         { "--filmgrain:shutter=1/x", { "shutter=1/x", "fraction", "SECONDS" } },
         { "--filmgrain:width_mm=-3", { "width_mm = -3", "(0, 1e9]", "" } },
-        { "--filmgrain:engine=fast", { "engine=fast", "unknown engine", "exact" } },
+        { "--filmgrain:engine=quick", { "engine=quick", "unknown engine", "exact" } },
+        { "--filmgrain:tolerance=0", { "tolerance=0", "(0, 1]", "" } },
+        { "--filmgrain:tolerance=abc", { "tolerance=abc", "not a decimal", "" } },
+        { "--filmgrain:kinetics=magic", { "kinetics=magic", "unknown kinetics", "table" } },
+        { "--filmgrain:photons=edge", { "photons=edge", "unknown exposure sampling", "centre" } },
+        { "--filmgrain:coverage=fuzzy", { "coverage=fuzzy", "unknown coverage", "scanline" } },
+        { "--filmgrain:samples=0", { "samples=0", "at least 1", "" } },
+        { "--filmgrain:samples=300", { "samples=300", "at most 256", "" } },
         { "--filmgrain:tile=0", { "tile=0", "at least 1", "" } },
         { "--filmgrain:tile=5000", { "tile=5000", "at most 4096", "" } },
         { "--filmgrain:exposure=", { "exposure=", "empty value", "STOPS" } },
@@ -144,8 +151,9 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
 TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
 {
     const auto docs = filmgrain_modifier_docs();
-    const char* keys[] = { "stock", "exposure", "shutter", "seed", "width_mm",
-                           "scan",  "roi",      "engine",  "tile" };
+    const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "width_mm",
+                           "scan",     "roi",      "engine",  "tolerance", "kinetics",
+                           "photons",  "coverage", "samples", "tile" };
     ASSERT_EQ(docs.size(), std::size(keys));
     for (size_t i = 0; i < docs.size(); ++i) {
         EXPECT_EQ(docs[i].key, keys[i]);
@@ -157,7 +165,8 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
     }
     EXPECT_EQ(docs[0].default_text, default_preset_name());
     EXPECT_EQ(docs[2].default_text, "0.0208333 (1/48)");
-    EXPECT_EQ(docs[8].default_text, std::to_string(RenderSettings().tile_size_px));
+    EXPECT_EQ(docs[7].default_text, engine_name(RenderSettings().engine));
+    EXPECT_EQ(docs[13].default_text, std::to_string(RenderSettings().tile_size_px));
 }
 
 TEST(Modifiers, OutputModifiers)

@@ -44,7 +44,12 @@ std::string stats_json(const RunReport& r)
                            { "developed", l.developed },
                            { "absorbed_photons", l.absorbed_photons },
                            { "kinetics_events", l.kinetics_events },
-                           { "mean_density", l.mean_density } });
+                           { "decided_early", l.decided_early },
+                           { "mean_density", l.mean_density },
+                           { "path", l.path },
+                           { "reason", l.reason },
+                           { "error_estimate", l.error_estimate },
+                           { "setup_seconds", l.setup_seconds } });
     j["layers"] = std::move(layers);
     // Non-UTF-8 bytes in names (file paths) are replaced, never thrown on.
     return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";

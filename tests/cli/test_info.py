@@ -6,7 +6,7 @@ import re
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
 MODIFIERS = ["stock", "exposure", "shutter", "seed", "width_mm", "scan", "roi",
-             "engine", "tile"]
+             "engine", "tolerance", "kinetics", "photons", "coverage", "samples", "tile"]
 
 OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",
            "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
@@ -41,7 +41,7 @@ def test_help_lists_every_option_and_modifier_with_default(run):
     assert "Default: 0.0208333 (1/48)." in mods["shutter"]
     assert "Default: 0." in mods["seed"]
     assert "Default: 24.89." in mods["width_mm"]
-    assert "Default: exact." in mods["engine"]
+    assert "Default: auto." in mods["engine"]
     assert "Default: 64." in mods["tile"]
     # Presets, config resolution order, exit status.
     assert "color-negative (default), paper" in text

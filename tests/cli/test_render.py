@@ -53,7 +53,7 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert exr.attr("filmgrain:exposure_stops") == pytest.approx(0.5)
     assert exr.attr("filmgrain:shutter_s") == pytest.approx(0.01)
     assert exr.attr("filmgrain:frame_width_mm") == pytest.approx(0.5)
-    assert exr.attr("filmgrain:engine") == "exact"
+    assert exr.attr("filmgrain:engine") == "auto"
     assert exr.attr("filmgrain:version") == \
         run("--version").stdout.split()[1]
 
@@ -72,7 +72,10 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert set(s["roi"]) == {"x", "y", "width", "height"}
     assert set(s["input"]) == {"file", "colorspace", "pixels_read", "nonfinite_pixels",
                                "negative_pixels", "denormal_pixels"}
-    assert s["engine"] == "exact" and s["stock"] == "color-negative" and s["seed"] == 42
+    assert s["engine"] == "auto" and s["stock"] == "color-negative" and s["seed"] == 42
+    for layer in s["layers"]:  # which path ran, why, and its error bound
+        assert layer["path"].startswith("kinetics=") and layer["reason"]
+        assert 0 <= layer["error_estimate"] <= 0.002
     assert s["scan"]["width"] == WIDTH and s["scan"]["height"] == HEIGHT
     assert s["scan"]["pitch_x_um"] == pytest.approx(500.0 / WIDTH)
     assert s["roi"] == {"x": 0, "y": 0, "width": WIDTH, "height": HEIGHT}
@@ -82,7 +85,8 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert [l["name"] for l in s["layers"]] == layer_names
     for l in s["layers"]:
         assert set(l) == {"name", "grains", "developed", "absorbed_photons",
-                          "kinetics_events", "mean_density"}
+                          "kinetics_events", "decided_early", "mean_density", "path",
+                          "reason", "error_estimate", "setup_seconds"}
         assert l["grains"] > 0 and 0 < l["developed"] <= l["grains"]
         assert l["mean_density"] == pytest.approx(float(exr.channels[l["name"]].mean()),
                                                   abs=2e-3)

@@ -35,18 +35,31 @@ SCENES = {
     "wedge_one_layer": {
         "input": None,
         "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
-                 ":width_mm=2:scan=168x16:seed=1"],
+                 ":width_mm=2:scan=168x16:seed=1:engine=exact"],
     },
     # A 40x30 RGB gradient through three layers (one with two populations).
     "gradient_three_layer": {
         "input": (40, 30),
-        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2"],
+        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=exact"],
     },
     # A scan of another size than the input: 32x24 in, 48x36 out (ratio 1.5,
     # so scan pixels straddle input pixels).
     "scan_resample": {
         "input": (32, 24),
-        "args": ["--filmgrain:stock={stocks}/one_layer.json:width_mm=1:scan=48:seed=3"],
+        "args": ["--filmgrain:stock={stocks}/one_layer.json:width_mm=1:scan=48:seed=3"
+                 ":engine=exact"],
+    },
+    # The default engine (auto: tabulated kinetics, exact coverage) and the
+    # fast one (centre exposure, scanline coverage) on the same scenes: both
+    # are deterministic too (their tables' Monte Carlo streams are seeded).
+    "wedge_one_layer_auto": {
+        "input": None,
+        "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
+                 ":width_mm=2:scan=168x16:seed=1:engine=auto"],
+    },
+    "gradient_three_layer_fast": {
+        "input": (40, 30),
+        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=fast"],
     },
 }
 

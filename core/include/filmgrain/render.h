@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,13 +39,47 @@ struct SceneSettings {
 
 /// Which engine simulates the grains.
 enum class Engine {
-    exact,  ///< the reference: every photon and latent-image event simulated
+    exact,      ///< the reference: every photon and latent-image event,
+                ///< exact pixel coverage; no knob may change it
+    fast,       ///< the fastest paths, whatever their error (reported)
+    automatic,  ///< ("auto") per layer, the paths the scene needs within
+                ///< the error budget `tolerance`; the default
 };
 
-/// Name of an engine as used on the command line and in metadata.
+/// How a grain's latent image decides its development (MODEL.md 3-4).
+enum class KineticsMethod {
+    chain,       ///< the full chain, every event (the reference)
+    early_stop,  ///< the chain until the outcome is decided: the develop
+                 ///< uniform is drawn first and n4 never decreases, so the
+                 ///< decision is exactly the full chain's (no error)
+    table,       ///< P(develop | N) tabulated once per scene by running the
+                 ///< chain; grains sample it (Monte Carlo error, reported)
+};
+
+/// How a grain's absorbed photon count gets its mean (MODEL.md 2).
+enum class ExposureMethod {
+    disc,    ///< exposure integrated over the disc (box reconstruction)
+    centre,  ///< exposure at the grain's centre times its area
+};
+
+/// How pixels get their coverage by developed discs (MODEL.md 5).
+enum class CoverageMethod {
+    exact,     ///< exact area of the union (Green's theorem)
+    scanline,  ///< exact chord unions on sub-scanlines, sampled in y
+};
+
+/// Names as used on the command line, in metadata and statistics.
 const char* engine_name(Engine engine);
-/// Parse an engine name; false if unknown.
+const char* kinetics_method_name(KineticsMethod method);
+const char* exposure_method_name(ExposureMethod method);
+const char* coverage_method_name(CoverageMethod method);
+/// All engine names, the default first.
+std::vector<std::string> engine_names();
+/// Parse a name; false if unknown.
 bool parse_engine(const std::string& name, Engine& out);
+bool parse_kinetics_method(const std::string& name, KineticsMethod& out);
+bool parse_exposure_method(const std::string& name, ExposureMethod& out);
+bool parse_coverage_method(const std::string& name, CoverageMethod& out);
 
 /// Reports progress in [0, 1]; return false to cancel the render. Called
 /// from the thread that called render_negative, at most ~10 times a second.
@@ -52,7 +87,18 @@ using ProgressCallback = std::function<bool(double fraction_done)>;
 
 /// How to render: engine, scan resolution, region, threads.
 struct RenderSettings {
-    Engine engine = Engine::exact;
+    Engine engine = Engine::automatic;
+    /// Density error budget of the approximate paths (auto): the largest
+    /// bias of a patch-mean density that a path may add. (0, 1].
+    double tolerance = 0.002;
+    /// Expert overrides of the engine's choices (fast and auto only; the
+    /// exact engine refuses them). Unset: the engine decides.
+    std::optional<KineticsMethod> kinetics;
+    std::optional<ExposureMethod> exposure_method;
+    std::optional<CoverageMethod> coverage;
+    /// Sub-scanlines per pixel row for scanline coverage; 0: the engine's.
+    /// [0, 256].
+    int coverage_samples = 0;
     /// Scan (output) width in pixels over the whole frame; 0: the input's.
     int64_t scan_width = 0;
     /// Scan height; 0: the frame's aspect at scan_width (or the input's).
@@ -66,6 +112,9 @@ struct RenderSettings {
     int tile_size_px = 64;
     /// Optional progress reporting and cancellation.
     ProgressCallback progress;
+
+    /// Ranges and combinations (e.g. overrides with the exact engine).
+    Status validate() const;
 };
 
 /// The scan's geometry for a given input size (MODEL.md 1).
@@ -92,7 +141,19 @@ struct LayerStats {
     uint64_t developed        = 0;  ///< of those, developed (fog included)
     uint64_t absorbed_photons = 0;  ///< photons they absorbed
     uint64_t kinetics_events  = 0;  ///< latent-image events simulated for them
+    /// Of the counted grains: decided before their photons were needed
+    /// (the develop uniform alone settled it; their photons are not counted).
+    uint64_t decided_early    = 0;
     double mean_density       = 0.0;  ///< mean output density of the region
+    /// The paths that ran, e.g. "kinetics=table exposure=disc
+    /// coverage=scanline:4", and why the engine chose them.
+    std::string path;
+    std::string reason;
+    /// Bound on the bias of a patch-mean density from the approximate
+    /// paths of this layer (0 for exact ones; see `reason`).
+    double error_estimate = 0.0;
+    /// Seconds spent building this layer's tables, before the tiles.
+    double setup_seconds = 0.0;
 };
 
 /// What the input held, over the input pixels the render read.

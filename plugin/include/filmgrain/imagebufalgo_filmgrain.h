@@ -39,6 +39,8 @@
 #include "filmgrain/render.h"
 #include "filmgrain/stock.h"
 
+#include <optional>
+
 namespace filmgrain {
 
 /// Everything the operator needs besides the images: the film, the shot and
@@ -60,8 +62,22 @@ struct FilmgrainOptions {
     SceneSettings scene;
 
     /// The simulation engine. Type Engine; default RenderSettings' default
-    /// (Engine::exact, the reference).
+    /// (Engine::automatic, "auto": the paths the scene needs within
+    /// `tolerance`). Engine::exact is the reference.
     Engine engine = RenderSettings().engine;
+
+    /// Density error budget of the approximate paths. double; default
+    /// RenderSettings' (0.002); range (0, 1].
+    double tolerance = RenderSettings().tolerance;
+
+    /// Expert overrides of the engine's path choices (not with
+    /// Engine::exact). std::optional; default unset: the engine decides.
+    std::optional<KineticsMethod> kinetics;
+    std::optional<ExposureMethod> exposure_method;
+    std::optional<CoverageMethod> coverage;
+    /// Sub-scanlines per pixel row of scanline coverage. int; default 0 =
+    /// the engine's choice; range [0, 256].
+    int coverage_samples = 0;
 
     /// Scan width in pixels over the whole frame. int64_t; default 0 =
     /// src's width. Must fit an OIIO image (at most 2^31 - 1).

@@ -1,0 +1,333 @@
+// Choosing the paths of a render, once per layer.
+#include "engine_plan.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "rng.h"
+
+namespace filmgrain {
+
+namespace {
+
+/// log10(e): Nutting's factor, D = 0.434 n a.
+constexpr double kLog10E = 0.43429448190325176;
+/// Largest photon count a table covers; grains beyond run the chain
+/// (early_stop, exact). Keeps the build cost bounded for blown highlights.
+constexpr uint64_t kTablePhotonCap = uint64_t(1) << 12;
+/// Normal score of the largest grain a table must cover: grains above it
+/// (about one in 740) that also catch more photons than the table holds run
+/// the chain instead (early_stop, exact).
+constexpr double kTableAreaQuantileZ = 3.0;
+
+/// Largest exposure value v of a layer over an input region.
+double max_value(const LayerExposure& ex, const InputRegion& r)
+{
+    double v = 0.0;
+    for (int64_t y = r.y0; y < r.y1; ++y)
+        for (int64_t x = r.x0; x < r.x1; ++x)
+            v = std::max(v, ex.value(x, y));
+    return v;
+}
+
+/// Poisson pmf over [n0, n1] by recurrence from the mode (no lgamma per
+/// term), calling f(n, p).
+template<typename F> void poisson_terms(double lambda, uint64_t n0, uint64_t n1, F&& f)
+{
+    if (lambda <= 0.0) {
+        if (n0 == 0)
+            f(0, 1.0);
+        return;
+    }
+    const uint64_t mode = std::clamp<uint64_t>(static_cast<uint64_t>(lambda), n0, n1);
+    const double pm     = std::exp(static_cast<double>(mode) * std::log(lambda) - lambda
+                                   - std::lgamma(static_cast<double>(mode) + 1.0));
+    double p = pm;
+    for (uint64_t n = mode;; --n) {
+        f(n, p);
+        if (n == n0 || p < 1e-300)
+            break;
+        p *= static_cast<double>(n) / lambda;
+    }
+    p = pm;
+    for (uint64_t n = mode + 1; n <= n1; ++n) {
+        p *= lambda / static_cast<double>(n);
+        if (p < 1e-300)
+            break;
+        f(n, p);
+    }
+}
+
+/// Bound on the bias of a patch-mean density caused by a population's
+/// table, over uniform exposures up to `photons_per_um2_max`. A patch's
+/// density is D = 0.434 n E[a P(N)] (MODEL.md 5), so a table error e(N)
+/// moves it by 0.434 n sum_N w_N e(N) with w_N = E[a 1{N_g = N}]. Node
+/// errors are independent Monte Carlo errors: their sum has standard
+/// deviation sqrt(sum w_N^2 se_N^2), counted at 2 sigma; interpolation
+/// errors may all lean one way, so they add as w_N times the bound.
+double table_density_error(const Population& pop, const DevelopTable& table,
+                           double photons_per_um2_max)
+{
+    const double s  = pop.diameter_log_sigma;
+    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
+    const int zn    = s > 0.0 ? 121 : 1;
+    double worst    = 0.0;
+    for (int k = 0; k <= 32; ++k) {
+        const double c = photons_per_um2_max * std::exp2(-0.5 * k);
+        std::vector<std::pair<uint64_t, double>> w;  // (N, weight), merged below
+        double interp = 0.0;
+        for (int i = 0; i < zn; ++i) {
+            const double z   = zn > 1 ? -5.0 + 10.0 * i / (zn - 1) : 0.0;
+            const double pdf = zn > 1 ? std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * (10.0 / (zn - 1)) : 1.0;
+            const double d   = std::exp(mu + s * z);
+            const double a   = M_PI / 4.0 * d * d;
+            const double lam = c * a;
+            const double sp  = 8.0 * std::sqrt(lam) + 8.0;
+            const uint64_t n0 = static_cast<uint64_t>(std::max(0.0, lam - sp));
+            const uint64_t n1 = std::min<uint64_t>(table.max_photons(),
+                                                   static_cast<uint64_t>(lam + sp));
+            if (n0 > n1)
+                continue;
+            poisson_terms(lam, n0, n1, [&](uint64_t n, double p) {
+                w.emplace_back(n, pdf * a * p);
+                if (!table.is_node(n))
+                    interp += pdf * a * p * table.max_interpolation_error();
+            });
+        }
+        std::sort(w.begin(), w.end());
+        double var = 0.0;
+        for (size_t i = 0; i < w.size();) {
+            uint64_t n   = w[i].first;
+            double total = 0.0;
+            for (; i < w.size() && w[i].first == n; ++i)
+                total += w[i].second;
+            const double se = table.standard_error(n);
+            var += total * total * se * se;
+        }
+        worst = std::max(worst, kLog10E * pop.grains_per_um2 * (2.0 * std::sqrt(var) + interp));
+    }
+    return worst;
+}
+
+std::string format_g(double v)
+{
+    std::ostringstream o;
+    o.precision(3);
+    o << v;
+    return o.str();
+}
+
+}  // namespace
+
+InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
+                         double margin_um)
+{
+    const RectUm r  = frame.scan_rect(roi.x_begin, roi.y_begin, roi.x_end, roi.y_end);
+    const double p  = frame.input_pitch_um;
+    const auto clip = [](double v, int64_t n) {
+        return std::clamp<int64_t>(static_cast<int64_t>(std::clamp(std::floor(v), -1.0, 9e18)), 0, n);
+    };
+    InputRegion out;
+    out.x0 = clip((r.x0_um - margin_um) / p, input.width);
+    out.x1 = clip((r.x1_um + margin_um) / p + 1, input.width);
+    out.y0 = clip((r.y0_um - margin_um) / p, input.height);
+    out.y1 = clip((r.y1_um + margin_um) / p + 1, input.height);
+    return out;
+}
+
+Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                   const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
+                   std::vector<LayerPlan>& out)
+{
+    out.clear();
+    const Development dev(stock);
+    const double lxs_per_value
+        = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
+    const bool exact = settings.engine == Engine::exact;
+    const bool fast  = settings.engine == Engine::fast;
+
+    // A table depends only on the rates (the shutter and development are
+    // the scene's): populations with the same rates share one, built once
+    // for the largest photon count and the smallest error any of them needs.
+    struct TableRequest {
+        KineticsRates rates;
+        DevelopTable::Options options;
+        std::shared_ptr<const DevelopTable> table;
+        double seconds = 0.0;
+    };
+    std::vector<TableRequest> requests;
+    struct Need {
+        size_t layer, population, request;
+        double photons_per_um2_max;
+        bool capped;
+    };
+    std::vector<Need> needs;
+    std::vector<double> v_max(stock.layers.size(), 0.0);
+
+    for (size_t l = 0; l < stock.layers.size(); ++l) {
+        const Layer& layer = stock.layers[l];
+        LayerPlan plan { LayerExposure(input, layer.sensitivity, frame.input_pitch_um),
+                         {}, CoverageMethod::exact, 0, "", "", 0.0, 0.0 };
+        double margin_um = 0.0, n_mean_area = 0.0, smallest_radius_um = 1e300;
+        for (size_t p = 0; p < layer.populations.size(); ++p) {
+            const Population& pop = layer.populations[p];
+            PopulationPlan pp { PopulationGrains(pop, scene.seed, static_cast<uint32_t>(l),
+                                                 static_cast<uint32_t>(p)),
+                                pop.quantum_efficiency * kPhotonsPerUm2PerLxs * lxs_per_value,
+                                { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
+                                pop.rate_area_exponent,
+                                KineticsMethod::chain,
+                                ExposureMethod::disc,
+                                nullptr };
+            margin_um = std::max(margin_um, pp.grains.max_radius_um());
+            n_mean_area += pop.grains_per_um2 * pp.grains.mean_area_um2();
+            smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
+            plan.populations.push_back(std::move(pp));
+        }
+        // Exposure (MODEL.md 2).
+        ExposureMethod exposure = fast ? ExposureMethod::centre : ExposureMethod::disc;
+        if (settings.exposure_method)
+            exposure = *settings.exposure_method;
+        // Coverage (MODEL.md 5).
+        // Sub-scanlines are spaced by a fraction of the smallest mean grain
+        // radius (not of the pixel): the sampling error of a disc's area
+        // depends on how many chords cross it, so every grain is crossed by
+        // about 2 * kChordsPerRadius chords whatever the scan resolution.
+        // Auto keeps the exact coverage: scanline sampling is unbiased in
+        // mean transmittance but its per-pixel noise biases the mean of
+        // per-pixel densities (the log is convex), and exact coverage per
+        // block (grid_coverage) costs little more.
+        const double chords_per_radius = 2.0;
+        plan.coverage = fast ? CoverageMethod::scanline : CoverageMethod::exact;
+        plan.coverage_samples = static_cast<int>(std::clamp(
+            std::ceil(chords_per_radius * frame.scan_pitch_y_um / smallest_radius_um), 1.0,
+            256.0));
+        if (settings.coverage)
+            plan.coverage = *settings.coverage;
+        if (settings.coverage_samples > 0)
+            plan.coverage_samples = settings.coverage_samples;
+
+        // Kinetics (MODEL.md 3-4), per population.
+        if (!exact)
+            v_max[l] = max_value(plan.exposure, input_region(input, frame, roi, margin_um));
+        std::ostringstream why;
+        for (size_t p = 0; p < plan.populations.size(); ++p) {
+            PopulationPlan& pp    = plan.populations[p];
+            const Population& pop = layer.populations[p];
+            pp.exposure           = exposure;
+            if (exact) {
+                pp.kinetics = KineticsMethod::chain;
+                continue;
+            }
+            KineticsMethod want = settings.kinetics ? *settings.kinetics : KineticsMethod::table;
+            if (want == KineticsMethod::table && pop.rate_area_exponent != 0.0) {
+                want = KineticsMethod::early_stop;
+                why << "population " << p
+                    << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
+                       "so no table: the chain runs until each outcome is decided; ";
+            }
+            if (want == KineticsMethod::table && v_max[l] <= 0.0) {
+                want = KineticsMethod::early_stop;
+                why << "population " << p << ": no light reaches it: fog only; ";
+            }
+            pp.kinetics = want;
+            if (want != KineticsMethod::table)
+                continue;
+            // The largest photon count the region gives a grain short of the
+            // largest ones, plus 6 Poisson sigmas.
+            const double s      = pop.diameter_log_sigma;
+            const double d_q    = std::exp(std::log(pop.diameter_um) - 0.5 * s * s
+                                           + s * kTableAreaQuantileZ);
+            const double lam    = pp.photons_per_value_um2 * v_max[l] * M_PI / 4.0 * d_q * d_q;
+            const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
+            // Budget: a node error e moves a patch density by at most
+            // 0.434 n E[a] e; nodes' errors partly average (estimated below).
+            const double target = std::max(fast ? 5e-3 : 0.0,
+                                           settings.tolerance / (kLog10E * n_mean_area));
+            const uint64_t n_max
+                = static_cast<uint64_t>(std::min<double>(n_need, kTablePhotonCap));
+            size_t r = 0;
+            while (r < requests.size()
+                   && !(requests[r].rates.k_pair_per_s == pp.rates.k_pair_per_s
+                        && requests[r].rates.k_join_per_s == pp.rates.k_join_per_s
+                        && requests[r].rates.k_loss_per_s == pp.rates.k_loss_per_s))
+                ++r;
+            if (r == requests.size()) {
+                TableRequest req;
+                req.rates                         = pp.rates;
+                req.options.max_photons           = n_max;
+                req.options.target_standard_error = target;
+                req.options.stream_key            = hash_ids(scene.seed, 0x7ab1e, r);
+                req.options.nthreads              = settings.nthreads;
+                requests.push_back(req);
+            } else {
+                auto& o       = requests[r].options;
+                o.max_photons = std::max(o.max_photons, n_max);
+                o.target_standard_error = std::min(o.target_standard_error, target);
+            }
+            needs.push_back({ l, p, r, pp.photons_per_value_um2 * v_max[l],
+                              n_need > kTablePhotonCap });
+        }
+        plan.reason = why.str();
+        out.push_back(std::move(plan));
+    }
+
+    for (TableRequest& req : requests) {
+        const auto t0 = std::chrono::steady_clock::now();
+        req.table     = std::make_shared<DevelopTable>(req.rates, scene.shutter_s, dev, req.options);
+        req.seconds   = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    std::vector<bool> charged(requests.size(), false);
+    for (const Need& need : needs) {
+        LayerPlan& plan        = out[need.layer];
+        PopulationPlan& pp     = plan.populations[need.population];
+        const TableRequest& rq = requests[need.request];
+        pp.table               = rq.table;
+        plan.error_estimate += table_density_error(
+            stock.layers[need.layer].populations[need.population], *pp.table,
+            need.photons_per_um2_max);
+        if (!charged[need.request]) {  // a shared table's time is charged once
+            plan.setup_seconds += rq.seconds;
+            charged[need.request] = true;
+        }
+        std::ostringstream why;
+        why << "population " << need.population << ": P(develop|N) tabulated for N <= "
+            << pp.table->max_photons() << " (table " << need.request << ": "
+            << pp.table->node_count() << " nodes, " << pp.table->total_runs()
+            << " chain runs, largest node error " << format_g(pp.table->max_standard_error())
+            << ", interpolation " << format_g(pp.table->max_interpolation_error()) << ")"
+            << (need.capped ? "; brighter grains run the chain" : "") << "; ";
+        plan.reason += why.str();
+    }
+
+    for (LayerPlan& plan : out) {
+        std::ostringstream path, why;
+        path << "kinetics=";
+        for (size_t p = 0; p < plan.populations.size(); ++p)
+            path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
+        const ExposureMethod exposure = plan.populations.front().exposure;
+        path << " exposure=" << exposure_method_name(exposure)
+             << " coverage=" << coverage_method_name(plan.coverage);
+        if (plan.coverage == CoverageMethod::scanline)
+            path << ":" << plan.coverage_samples;
+        plan.path = path.str();
+        if (exact) {
+            why << "the reference engine: every photon and event, exact coverage";
+        } else {
+            if (exposure == ExposureMethod::centre)
+                why << "exposure sampled at grain centres (error at image edges, measured in "
+                       "docs/); ";
+            if (plan.coverage == CoverageMethod::scanline)
+                why << "coverage on " << plan.coverage_samples
+                    << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "
+                       "per pixel); ";
+            why << "error estimate = patch-mean density bias bound at 2 sigma from the tables";
+        }
+        plan.reason += why.str();
+    }
+    return {};
+}
+
+}  // namespace filmgrain

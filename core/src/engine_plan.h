@@ -1,0 +1,61 @@
+// filmgrain: choosing, once per render and layer, the paths a scene needs
+// (OCIO's "renderer chosen once" pattern): which kinetics, exposure and
+// coverage methods run, the tables they use, and the error they add.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "development.h"
+#include "exposure.h"
+#include "filmgrain/render.h"
+#include "geometry.h"
+#include "kinetics.h"
+#include "kinetics_table.h"
+
+namespace filmgrain {
+
+/// Everything a tile needs about one population, prepared once.
+struct PopulationPlan {
+    PopulationGrains grains;
+    /// Mean absorbed photons per (value x square micrometre):
+    /// quantum_efficiency * 4.09e3 * H per unit value (MODEL.md 2).
+    double photons_per_value_um2 = 0.0;
+    KineticsRates rates;
+    double rate_area_exponent = 0.0;
+    KineticsMethod kinetics   = KineticsMethod::chain;
+    ExposureMethod exposure   = ExposureMethod::disc;
+    /// For KineticsMethod::table; grains beyond its range use early_stop.
+    std::shared_ptr<const DevelopTable> table;
+};
+
+/// Everything a tile needs about one layer.
+struct LayerPlan {
+    LayerExposure exposure;
+    std::vector<PopulationPlan> populations;
+    CoverageMethod coverage = CoverageMethod::exact;
+    int coverage_samples    = 0;
+    /// For the statistics: what runs, why, its error bound, setup time.
+    std::string path;
+    std::string reason;
+    double error_estimate = 0.0;
+    double setup_seconds  = 0.0;
+};
+
+/// Decides the paths for every layer and builds what they need. `roi` is
+/// the scan region that will be rendered (tables cover the photon counts
+/// the input region under it can produce).
+Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                   const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
+                   std::vector<LayerPlan>& out);
+
+/// The input pixel rectangle [x0, x1) x [y0, y1) that a render of `roi`
+/// reads: the ROI's film rectangle grown by `margin_um`, clipped.
+struct InputRegion {
+    int64_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
+                         double margin_um);
+
+}  // namespace filmgrain

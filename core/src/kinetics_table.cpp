@@ -1,0 +1,153 @@
+// MODEL.md sections 3-4 tabulated: P(develop | N).
+#include "kinetics_table.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "rng.h"
+
+namespace filmgrain {
+
+namespace {
+
+struct NodeResult {
+    double p      = 0.0;
+    double se     = 0.0;
+    uint64_t runs = 0, events = 0;
+};
+
+/// Runs the chain for n photons until the standard error of the mean
+/// survival is below the target. Each run contributes its survival
+/// probability (1 - f)(1 - d)^n4: a conditional expectation, with less
+/// variance than counting developed grains.
+NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_s,
+                         const Development& dev, const DevelopTable::Options& o)
+{
+    NodeResult r;
+    if (n < 4) {
+        r.p = dev.develop_probability(0);
+        return r;
+    }
+    double sum = 0.0, sum2 = 0.0;
+    // Runs cost about n events each: above 256 photons the first batch
+    // shrinks so that it costs no more than at 256 (the error floor below
+    // keeps a small batch from stopping on a lucky zero variance).
+    const int batch = std::max(32, static_cast<int>(std::min<uint64_t>(
+                                       o.min_samples, o.min_samples * uint64_t(256) / n)));
+    for (int done = 0; done < o.max_samples;) {
+        for (int i = 0; i < batch && done < o.max_samples; ++i, ++done) {
+            Rng rng(hash_ids(o.stream_key, 0x7ab1e, n, static_cast<uint64_t>(done)),
+                    Stage::kinetics);
+            uint64_t events = 0;
+            const LatentImage c = simulate_latent_image(n, shutter_s, rates, rng, &events);
+            const double s      = dev.survival_probability(c.n4);
+            sum += s;
+            sum2 += s * s;
+            r.events += events;
+        }
+        r.runs          = static_cast<uint64_t>(done);
+        const double m  = sum / done;
+        const double v  = std::max(0.0, sum2 / done - m * m);
+        // Runs that all agree still leave an unseen outcome possible: its
+        // weight is about 1/done at most, so the error is never below that.
+        r.se = std::max(std::sqrt(v / done), 1.0 / done);
+        r.p  = 1.0 - m;
+        if (r.se <= o.target_standard_error)
+            break;
+    }
+    return r;
+}
+
+}  // namespace
+
+DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const Development& dev,
+                           const Options& options)
+    : m_options(options)
+{
+    for (uint64_t n = 0; n <= std::min(options.max_photons, options.dense_photons); ++n)
+        m_nodes_n.push_back(n);
+    double next = static_cast<double>(m_nodes_n.back());
+    while (m_nodes_n.back() < options.max_photons) {
+        const double ratio = m_nodes_n.back() < options.coarse_photons ? options.node_ratio
+                                                                       : options.coarse_ratio;
+        next = std::max(next * ratio, static_cast<double>(m_nodes_n.back() + 1));
+        m_nodes_n.push_back(std::min(options.max_photons, static_cast<uint64_t>(std::ceil(next))));
+    }
+
+    // Nodes are independent: build them on worker threads, largest first
+    // (they cost most), each into its own slot.
+    std::vector<NodeResult> results(m_nodes_n.size());
+    std::atomic<size_t> next_node { 0 };
+    const auto work = [&]() {
+        for (size_t k; (k = next_node++) < m_nodes_n.size();) {
+            const size_t i = m_nodes_n.size() - 1 - k;
+            results[i]     = estimate_node(m_nodes_n[i], rates, shutter_s, dev, m_options);
+        }
+    };
+    int nthreads = options.nthreads > 0 ? options.nthreads
+                                        : static_cast<int>(std::thread::hardware_concurrency());
+    nthreads = std::max(1, std::min<int>(nthreads, static_cast<int>(m_nodes_n.size())));
+    std::vector<std::thread> threads;
+    for (int t = 1; t < nthreads; ++t)
+        threads.emplace_back(work);
+    work();
+    for (auto& t : threads)
+        t.join();
+
+    for (const NodeResult& r : results) {
+        m_nodes_p.push_back(r.p);
+        m_nodes_se.push_back(r.se);
+        m_max_p  = std::max(m_max_p, r.p);
+        m_min_p  = std::min(m_min_p, r.p);
+        m_max_se = std::max(m_max_se, r.se);
+        m_total_runs += r.runs;
+        m_total_events += r.events;
+    }
+    // Interpolation error: only between sparse nodes (dense nodes are exact
+    // integers, nothing is interpolated there).
+    for (size_t i = 1; i + 1 < m_nodes_n.size(); ++i) {
+        if (m_nodes_n[i + 1] - m_nodes_n[i - 1] <= 2)
+            continue;
+        const double h0 = static_cast<double>(m_nodes_n[i] - m_nodes_n[i - 1]);
+        const double h1 = static_cast<double>(m_nodes_n[i + 1] - m_nodes_n[i]);
+        const double s0 = (m_nodes_p[i] - m_nodes_p[i - 1]) / h0;
+        const double s1 = (m_nodes_p[i + 1] - m_nodes_p[i]) / h1;
+        // f'' ~ 2 (s1 - s0) / (h0 + h1); error <= h^2 f'' / 8 with h = max.
+        const double h     = std::max(h0, h1);
+        const double err   = h * h * std::fabs(2.0 * (s1 - s0) / (h0 + h1)) / 8.0;
+        m_max_interp       = std::max(m_max_interp, err);
+    }
+}
+
+bool DevelopTable::is_node(uint64_t n) const
+{
+    return std::binary_search(m_nodes_n.begin(), m_nodes_n.end(), n);
+}
+
+double DevelopTable::standard_error(uint64_t n) const
+{
+    const auto it = std::lower_bound(m_nodes_n.begin(), m_nodes_n.end(), n);
+    if (it == m_nodes_n.end())
+        return m_nodes_se.back();
+    const size_t i = static_cast<size_t>(it - m_nodes_n.begin());
+    if (*it == n || i == 0)
+        return m_nodes_se[i];
+    return std::max(m_nodes_se[i - 1], m_nodes_se[i]);
+}
+
+double DevelopTable::interpolate(uint64_t n) const
+{
+    const auto it = std::upper_bound(m_nodes_n.begin(), m_nodes_n.end(), n);
+    if (it == m_nodes_n.end())
+        return m_nodes_p.back();
+    const size_t i = static_cast<size_t>(it - m_nodes_n.begin());  // nodes[i] > n
+    if (i == 0)
+        return m_nodes_p.front();
+    const double n0 = static_cast<double>(m_nodes_n[i - 1]), n1 = static_cast<double>(m_nodes_n[i]);
+    const double t  = (static_cast<double>(n) - n0) / (n1 - n0);
+    return m_nodes_p[i - 1] + t * (m_nodes_p[i] - m_nodes_p[i - 1]);
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,89 @@
+// filmgrain: MODEL.md sections 3-4 tabulated: P(develop | N absorbed
+// photons) for one population's rates and the scene's shutter.
+//
+// When irradiance is constant over the shutter, a grain's latent image
+// depends only on its photon count N, the shutter and its rates. For a
+// population whose rates do not depend on grain area (rate_area_exponent =
+// 0) the probability that a grain with N photons develops is then one
+// function P(N), the same for every grain of the scene. The table samples
+// it once per scene by running the exact chain (MODEL.md 3) many times per
+// node, and grains draw their outcome from it: equal in distribution to the
+// exact engine up to the table's own error, which it reports.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "development.h"
+#include "kinetics.h"
+
+namespace filmgrain {
+
+class DevelopTable {
+public:
+    struct Options {
+        /// Largest N tabulated; grains with more photons use the chain.
+        uint64_t max_photons = 64;
+        /// Monte Carlo runs per node stop when the standard error of P at
+        /// that node is below this (or at max_samples).
+        double target_standard_error = 1e-3;
+        int min_samples = 256;
+        int max_samples = 1 << 17;
+        /// Nodes are every N up to dense_photons, then spaced by node_ratio
+        /// up to coarse_photons, then by coarse_ratio (P(N) flattens out).
+        uint64_t dense_photons  = 64;
+        double node_ratio       = 1.06;
+        uint64_t coarse_photons = 1024;
+        double coarse_ratio     = 1.25;
+        /// Keys the Monte Carlo streams (apart from every grain's).
+        uint64_t stream_key = 0;
+        /// Worker threads for the build (0: all).
+        int nthreads = 0;
+    };
+
+    /// Builds the table. Deterministic for any thread count: each node's
+    /// runs have their own streams. Cost: about sum over nodes of runs x N
+    /// chain steps.
+    DevelopTable(const KineticsRates& rates, double shutter_s, const Development& dev,
+                 const Options& options);
+
+    /// P(develop | n) for n <= max_photons(): exact for n < 4 (fog only),
+    /// the node's estimate at a node, linear interpolation between nodes.
+    double probability(uint64_t n) const
+    {
+        if (n < m_nodes_n.size() && n <= m_options.dense_photons)
+            return m_nodes_p[n];
+        return interpolate(n);
+    }
+    uint64_t max_photons() const { return m_options.max_photons; }
+    /// Standard error of P at n: the node's at a node, the larger of the
+    /// two neighbours' between nodes.
+    double standard_error(uint64_t n) const;
+    /// Whether n is a node (no interpolation error there).
+    bool is_node(uint64_t n) const;
+    /// Largest and smallest P over the table (for early decisions).
+    double max_probability() const { return m_max_p; }
+    double min_probability() const { return m_min_p; }
+
+    /// Largest Monte Carlo standard error of a node.
+    double max_standard_error() const { return m_max_se; }
+    /// Estimated largest error of linear interpolation between nodes:
+    /// |second difference| / 8 of each pair of neighbouring intervals (the
+    /// h^2 f''/8 bound of linear interpolation, MC noise included).
+    double max_interpolation_error() const { return m_max_interp; }
+    size_t node_count() const { return m_nodes_n.size(); }
+    uint64_t total_runs() const { return m_total_runs; }
+    uint64_t total_events() const { return m_total_events; }
+
+private:
+    double interpolate(uint64_t n) const;
+
+    Options m_options;
+    std::vector<uint64_t> m_nodes_n;
+    std::vector<double> m_nodes_p;
+    std::vector<double> m_nodes_se;
+    double m_max_p = 0.0, m_min_p = 1.0, m_max_se = 0.0, m_max_interp = 0.0;
+    uint64_t m_total_runs = 0, m_total_events = 0;
+};
+
+}  // namespace filmgrain

@@ -1,0 +1,58 @@
+// Tests of the tabulated P(develop | N) against independent runs of the
+// chain, and of its error reporting.
+#include "kinetics_table.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "expectations.h"
+
+namespace filmgrain {
+namespace {
+
+TEST(DevelopTable, AgreesWithIndependentRunsOfTheChain)
+{
+    Stock stock;
+    const Development dev(stock);
+    const KineticsRates rates { 1e7, 1e6, 10 };
+    for (double shutter : { 1e-6, 1.0 / 48, 100.0 }) {
+        DevelopTable::Options o;
+        o.max_photons           = 300;
+        o.target_standard_error = 2e-3;
+        o.stream_key            = 1;
+        const DevelopTable table(rates, shutter, dev, o);
+        EXPECT_LE(table.max_standard_error(), 2e-3 + 1e-12);
+        // Independent estimate (other streams). The difference of two
+        // independent estimates has sd sqrt(se1^2 + se2^2); at an
+        // interpolated N add the reported interpolation error. 5 sigma.
+        DevelopGivenPhotons reference(rates, shutter, dev, 20000, 99);
+        for (uint64_t n : { 0u, 3u, 4u, 7u, 20u, 64u, 101u, 250u }) {
+            const Estimate e = reference(n);
+            const double tol = 5 * std::hypot(e.standard_error, table.max_standard_error())
+                               + (n > o.dense_photons ? table.max_interpolation_error() : 0.0);
+            EXPECT_NEAR(table.probability(n), e.value, tol) << "shutter " << shutter << " n " << n;
+        }
+        // N < 4: fog only, exactly.
+        EXPECT_EQ(table.probability(2), dev.develop_probability(0));
+        EXPECT_GE(table.max_probability(), table.min_probability());
+    }
+}
+
+TEST(DevelopTable, DeterministicForAnyThreadCount)
+{
+    Stock stock;
+    const Development dev(stock);
+    DevelopTable::Options o;
+    o.max_photons           = 200;
+    o.target_standard_error = 5e-3;
+    o.nthreads              = 1;
+    const DevelopTable a({ 1e7, 1e6, 10 }, 0.02, dev, o);
+    o.nthreads = 3;
+    const DevelopTable b({ 1e7, 1e6, 10 }, 0.02, dev, o);
+    for (uint64_t n = 0; n <= 200; ++n)
+        ASSERT_EQ(a.probability(n), b.probability(n)) << n;
+}
+
+}  // namespace
+}  // namespace filmgrain
