@@ -1,0 +1,392 @@
+// What the model predicts for a uniform layer: development by grain size,
+// the Boolean model of opaque discs, aperture variance, Nutting and
+// Siedentopf. No rendering: the distributions of MODEL.md 1-5 composed.
+#include "boolean_model.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+
+#include "development.h"
+#include "expectations.h"
+#include "exposure.h"
+#include "kinetics.h"
+
+namespace filmgrain::sensitometry {
+
+namespace {
+
+/// Diameter quadrature: the normal score z of ln d on [-7, 7] (the rest
+/// holds 2.6e-12 of the grains), trapezoid rule.
+constexpr double kZMax    = 7.0;
+constexpr int kZNodes     = 561;
+
+double log_poisson(uint64_t n, double lambda)
+{
+    if (lambda <= 0.0)
+        return n == 0 ? 0.0 : -INFINITY;
+    return static_cast<double>(n) * std::log(lambda) - lambda - std::lgamma(n + 1.0);
+}
+
+}  // namespace
+
+double lens_area_um2(double r_um, double h_um)
+{
+    if (h_um >= 2.0 * r_um)
+        return 0.0;
+    const double h = std::max(0.0, h_um);
+    return 2.0 * r_um * r_um * std::acos(h / (2.0 * r_um))
+           - 0.5 * h * std::sqrt(std::max(0.0, 4.0 * r_um * r_um - h * h));
+}
+
+Status develop_by_size(const Stock& stock, const Population& pop, double exposure_lxs,
+                       double shutter_s, int max_samples, uint64_t seed,
+                       PopulationDevelopment& out, int min_samples)
+{
+    if (pop.rate_area_exponent != 0.0)
+        return Status::errorf("rate_area_exponent = ", pop.rate_area_exponent,
+                              ": the size-resolved prediction needs 0 (P(develop | N) "
+                              "independent of the grain size)");
+    const double s  = pop.diameter_log_sigma;
+    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
+    const double photons_per_um2 = pop.quantum_efficiency * kPhotonsPerUm2PerLxs * exposure_lxs;
+    const int nodes = s > 0.0 ? kZNodes : 1;
+    out = PopulationDevelopment {};
+    out.grains_per_um2 = pop.grains_per_um2;
+    std::vector<double> lambda(static_cast<size_t>(nodes)), area(static_cast<size_t>(nodes));
+    double wsum = 0.0;
+    for (int k = 0; k < nodes; ++k) {
+        const double z  = nodes > 1 ? -kZMax + 2.0 * kZMax * k / (nodes - 1) : 0.0;
+        const double w  = nodes > 1 ? std::exp(-0.5 * z * z) * ((k == 0 || k == nodes - 1) ? 0.5 : 1.0)
+                                    : 1.0;
+        const double d  = std::exp(mu + s * z);
+        SizeNode node;
+        node.diameter_um = d;
+        node.weight      = w;
+        wsum += w;
+        out.nodes.push_back(node);
+        area[static_cast<size_t>(k)]   = M_PI / 4.0 * d * d;
+        lambda[static_cast<size_t>(k)] = photons_per_um2 * area[static_cast<size_t>(k)];
+    }
+    for (SizeNode& node : out.nodes)
+        node.weight /= wsum;
+
+    // Importance of each photon count N: its share of E[a P] and of
+    // E[a^2 P] (what the mean and the variance integrals weigh).
+    std::map<uint64_t, std::array<double, 2>> importance;
+    const auto for_each_count = [&](size_t k, auto&& f) {
+        const double l      = lambda[k];
+        const double spread = 12.0 * std::sqrt(l) + 12.0;
+        const uint64_t n0   = static_cast<uint64_t>(std::max(0.0, std::floor(l - spread)));
+        const uint64_t n1   = static_cast<uint64_t>(std::ceil(l + spread));
+        for (uint64_t n = n0; n <= n1; ++n) {
+            const double p = std::exp(log_poisson(n, l));
+            if (p > 1e-300)
+                f(n, p);
+        }
+    };
+    double total[2] = { 0.0, 0.0 };
+    for (size_t k = 0; k < out.nodes.size(); ++k) {
+        const double w = out.nodes[k].weight, a = area[k];
+        for_each_count(k, [&](uint64_t n, double p) {
+            auto& imp = importance[n];
+            imp[0] += w * a * p;
+            imp[1] += w * a * a * p;
+        });
+        total[0] += w * a;
+        total[1] += w * a * a;
+    }
+    // Drop the lightest counts while their share of both stays below 1e-7;
+    // a dropped count borrows P(develop | N) from the nearest kept one
+    // (P is bounded, so the error is below that share).
+    std::vector<std::pair<double, uint64_t>> by_share;
+    for (const auto& [n, imp] : importance)
+        by_share.emplace_back(std::max(imp[0] / total[0], imp[1] / total[1]), n);
+    std::sort(by_share.begin(), by_share.end());
+    double dropped = 0.0;
+    size_t first_kept = 0;
+    while (first_kept < by_share.size() && dropped + by_share[first_kept].first < 1e-7)
+        dropped += by_share[first_kept++].first;
+    const double share_max = by_share.empty() ? 1.0 : by_share.back().first;
+
+    const Development dev(stock);
+    DevelopGivenPhotons given_n({ pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
+                                shutter_s, dev, max_samples, seed);
+    std::map<uint64_t, Estimate> p_given_n;
+    for (size_t i = first_kept; i < by_share.size(); ++i) {
+        // A count's Monte Carlo error is weighted by its share, so light
+        // counts need few runs.
+        const int runs = static_cast<int>(std::ceil(std::max<double>(
+            min_samples, max_samples * by_share[i].first / share_max)));
+        p_given_n[by_share[i].second] = given_n(by_share[i].second, runs);
+    }
+    const auto p_of = [&](uint64_t n) -> Estimate {
+        auto it = p_given_n.lower_bound(n);
+        if (it == p_given_n.end())
+            return std::prev(it)->second;
+        if (it->first == n || it == p_given_n.begin())
+            return it->second;
+        auto below = std::prev(it);
+        return (n - below->first <= it->first - n) ? below->second : it->second;
+    };
+
+    double var_area = 0.0;
+    std::map<uint64_t, double> area_weight;  // d E[aP] / d P(N), for the error
+    for (size_t k = 0; k < out.nodes.size(); ++k) {
+        double pk = 0.0;
+        for_each_count(k, [&](uint64_t n, double p) {
+            pk += p * p_of(n).value;
+            area_weight[n] += out.nodes[k].weight * area[k] * p;
+        });
+        out.nodes[k].develop_probability = std::clamp(pk, 0.0, 1.0);
+        const double w = out.nodes[k].weight, a = area[k];
+        out.develop_fraction += w * out.nodes[k].develop_probability;
+        out.area_developed_um2 += w * a * out.nodes[k].develop_probability;
+        out.area2_developed_um4 += w * a * a * out.nodes[k].develop_probability;
+    }
+    for (const auto& [n, w] : area_weight) {
+        const auto it = p_given_n.find(n);
+        if (it != p_given_n.end())
+            var_area += w * w * it->second.standard_error * it->second.standard_error;
+    }
+    out.area_developed_se_um2 = std::sqrt(var_area) + dropped * total[0];
+    return {};
+}
+
+BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations,
+                           double h_step_um)
+    : m_step_um(h_step_um)
+{
+    double h_max = 0.0;
+    for (const auto& pop : populations) {
+        m_developed_per_um2 += pop.grains_per_um2 * pop.develop_fraction;
+        m_area_developed += pop.grains_per_um2 * pop.area_developed_um2;
+        for (const SizeNode& node : pop.nodes)
+            if (node.weight * node.develop_probability > 1e-15)
+                h_max = std::max(h_max, node.diameter_um);
+    }
+    const size_t steps = static_cast<size_t>(std::ceil(h_max / m_step_um)) + 2;
+    m_k.assign(steps, 0.0);
+    for (size_t i = 0; i < steps; ++i) {
+        const double h = static_cast<double>(i) * m_step_um;
+        double k = 0.0;
+        for (const auto& pop : populations) {
+            double sum = 0.0;
+            for (const SizeNode& node : pop.nodes)
+                if (node.diameter_um > h)
+                    sum += node.weight * node.develop_probability
+                           * lens_area_um2(0.5 * node.diameter_um, h);
+            k += pop.grains_per_um2 * sum;
+        }
+        m_k[i] = k;
+    }
+    m_range_um = 0.0;
+    for (size_t i = 0; i < steps; ++i)
+        if (m_k[i] > 1e-9 * m_k[0])
+            m_range_um = static_cast<double>(i + 1) * m_step_um;
+}
+
+Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, double shutter_s,
+                     int max_samples, uint64_t seed, BooleanLayer& out, int min_samples)
+{
+    if (layer >= stock.layers.size())
+        return Status::errorf("layer ", layer, ": the stock has ", stock.layers.size());
+    double sens = 0.0;
+    for (double w : stock.layers[layer].sensitivity)
+        sens += w;
+    std::vector<PopulationDevelopment> pops;
+    for (const Population& pop : stock.layers[layer].populations) {
+        PopulationDevelopment d;
+        if (Status s = develop_by_size(stock, pop, exposure_lxs * sens, shutter_s, max_samples,
+                                       seed + pops.size(), d, min_samples);
+            !s)
+            return s;
+        pops.push_back(std::move(d));
+    }
+    out = BooleanLayer(pops);
+    return {};
+}
+
+Status exposure_for_predicted_density(const Stock& stock, size_t layer, double net_density,
+                                      double shutter_s, double log10_h_guess, double& log10_h)
+{
+    const auto density_at = [&](double x, double& d) -> Status {
+        BooleanLayer b;
+        if (Status s = predict_layer(stock, layer, std::pow(10.0, x), shutter_s, 50, 99, b, 2); !s)
+            return s;
+        d = b.net_density();
+        return {};
+    };
+    double x = log10_h_guess, d = 0.0;
+    if (Status s = density_at(x, d); !s)
+        return s;
+    const double dir = d < net_density ? 0.5 : -0.5;
+    double a = x, b = x;
+    for (int i = 0;; ++i) {
+        if (i == 12)
+            return Status::errorf("predicted net density ", net_density, " not reached within 6 "
+                                  "decades of log10 H = ", log10_h_guess, " (last: ", d, ")");
+        const double x2 = x + dir;
+        double d2 = 0.0;
+        if (Status s = density_at(x2, d2); !s)
+            return s;
+        if ((d2 - net_density) * dir >= 0.0) {
+            a = std::min(x, x2);
+            b = std::max(x, x2);
+            break;
+        }
+        x = x2;
+    }
+    while (b - a > 0.002) {
+        const double m = 0.5 * (a + b);
+        double dm = 0.0;
+        if (Status s = density_at(m, dm); !s)
+            return s;
+        (dm < net_density ? a : b) = m;
+    }
+    log10_h = 0.5 * (a + b);
+    return {};
+}
+
+double BooleanLayer::mean_transmittance() const { return std::exp(-coverage()); }
+
+double BooleanLayer::net_density() const { return coverage() / std::log(10.0); }
+
+double BooleanLayer::mean_developed_area_um2() const
+{
+    return m_developed_per_um2 > 0.0 ? m_area_developed / m_developed_per_um2 : 0.0;
+}
+
+double BooleanLayer::overlap(double h_um) const
+{
+    const double x = std::fabs(h_um) / m_step_um;
+    const size_t i = static_cast<size_t>(x);
+    if (i + 1 >= m_k.size() || h_um >= m_range_um)
+        return 0.0;
+    const double f = x - static_cast<double>(i);
+    return m_k[i] * (1.0 - f) + m_k[i + 1] * f;
+}
+
+double BooleanLayer::covariance(double h_um) const
+{
+    const double t = mean_transmittance();
+    return t * t * std::expm1(overlap(h_um));
+}
+
+double ApertureTemplate::area_um2() const
+{
+    double sum = 0.0;
+    for (double w : weights)
+        sum += w;
+    return sum * pitch_um * pitch_um;
+}
+
+ApertureTemplate make_circular_aperture(double diameter_um, double pitch_um)
+{
+    ApertureTemplate a;
+    a.diameter_um = diameter_um;
+    a.pitch_um    = pitch_um;
+    const double r = 0.5 * diameter_um;
+    a.radius_px    = static_cast<int>(std::ceil(r / pitch_um + 0.5));
+    const int side = 2 * a.radius_px + 1;
+    a.weights.assign(static_cast<size_t>(side * side), 0.0);
+    for (int dy = -a.radius_px; dy <= a.radius_px; ++dy)
+        for (int dx = -a.radius_px; dx <= a.radius_px; ++dx) {
+            const double x0 = (dx - 0.5) * pitch_um, y0 = (dy - 0.5) * pitch_um;
+            a.weights[static_cast<size_t>((dy + a.radius_px) * side + dx + a.radius_px)]
+                = disc_rect_area_um2(0.0, 0.0, r, x0, y0, x0 + pitch_um, y0 + pitch_um)
+                  / (pitch_um * pitch_um);
+        }
+    return a;
+}
+
+namespace {
+
+/// Cpix(L) for |L_x|, |L_y| <= lag_max: the covariance of the mean
+/// transmittances of two pixels of side p whose offset is L pixels,
+/// (1/p^4) integral of C(h) (p - |h_x - L_x p|)(p - |h_y - L_y p|) over the
+/// tent's support. Midpoint rule on a 32 x 32 grid (the tent is bilinear
+/// and C is smooth away from h = 0, where it has only a cusp: the rule's
+/// error is far below the statistical errors). Row-major, (2 lag_max + 1)^2.
+std::vector<double> pixel_covariances(const BooleanLayer& layer, double p, int lag_max)
+{
+    constexpr int kGrid = 32;
+    const int lag_side  = 2 * lag_max + 1;
+    std::vector<double> cpix(static_cast<size_t>(lag_side * lag_side), 0.0);
+    for (int ly = 0; ly <= lag_max; ++ly)
+        for (int lx = ly; lx <= lag_max; ++lx) {
+            double sum = 0.0;
+            for (int j = 0; j < kGrid; ++j) {
+                const double v  = -p + (j + 0.5) * 2.0 * p / kGrid;
+                const double ty = p - std::fabs(v);
+                for (int i = 0; i < kGrid; ++i) {
+                    const double u  = -p + (i + 0.5) * 2.0 * p / kGrid;
+                    const double tx = p - std::fabs(u);
+                    sum += tx * ty * layer.covariance(std::hypot(lx * p + u, ly * p + v));
+                }
+            }
+            const double c = sum * (2.0 * p / kGrid) * (2.0 * p / kGrid) / (p * p * p * p);
+            // Symmetric in the signs of the lags and under swapping them.
+            for (int sx : { -1, 1 })
+                for (int sy : { -1, 1 }) {
+                    cpix[static_cast<size_t>((sy * ly + lag_max) * lag_side + sx * lx + lag_max)] = c;
+                    cpix[static_cast<size_t>((sx * lx + lag_max) * lag_side + sy * ly + lag_max)] = c;
+                }
+        }
+    return cpix;
+}
+
+}  // namespace
+
+double aperture_transmittance_variance(const BooleanLayer& layer,
+                                       const ApertureTemplate& aperture)
+{
+    const double p    = aperture.pitch_um;
+    const int lag_max = static_cast<int>(std::ceil(layer.range_um() / p)) + 1;
+    const int lag_side = 2 * lag_max + 1;
+    const std::vector<double> cpix = pixel_covariances(layer, p, lag_max);
+    const int r    = aperture.radius_px;
+    double w_total = 0.0;
+    for (double w : aperture.weights)
+        w_total += w;
+    double var = 0.0;
+    for (int ly = -lag_max; ly <= lag_max; ++ly)
+        for (int lx = -lag_max; lx <= lag_max; ++lx) {
+            double rl = 0.0;  // autocorrelation of the weights at lag (lx, ly)
+            for (int y = -r; y <= r; ++y) {
+                if (y + ly < -r || y + ly > r)
+                    continue;
+                for (int x = -r; x <= r; ++x)
+                    if (x + lx >= -r && x + lx <= r)
+                        rl += aperture.weight(x, y) * aperture.weight(x + lx, y + ly);
+            }
+            var += rl * cpix[static_cast<size_t>((ly + lag_max) * lag_side + lx + lag_max)];
+        }
+    return var / (w_total * w_total);
+}
+
+double square_transmittance_variance(const BooleanLayer& layer, int64_t side_px, double pitch_um)
+{
+    const int lag_max  = static_cast<int>(std::ceil(layer.range_um() / pitch_um)) + 1;
+    const int lag_side = 2 * lag_max + 1;
+    const std::vector<double> cpix = pixel_covariances(layer, pitch_um, lag_max);
+    const double n = static_cast<double>(side_px);
+    double var = 0.0;
+    for (int ly = -lag_max; ly <= lag_max; ++ly)
+        for (int lx = -lag_max; lx <= lag_max; ++lx) {
+            // Pixel pairs of the square at this lag.
+            const double pairs = std::max(0.0, n - std::abs(lx)) * std::max(0.0, n - std::abs(ly));
+            var += pairs * cpix[static_cast<size_t>((ly + lag_max) * lag_side + lx + lag_max)];
+        }
+    return var / (n * n * n * n);
+}
+
+double siedentopf_sigma_density(double mean_grain_area_um2, double net_density,
+                                double aperture_area_um2)
+{
+    return std::sqrt(std::max(0.0, std::log10(std::exp(1.0)) * mean_grain_area_um2 * net_density
+                                       / aperture_area_um2));
+}
+
+}  // namespace filmgrain::sensitometry
