@@ -76,7 +76,8 @@ double table_density_error(const Population& pop, const DevelopTable& table,
     double worst    = 0.0;
     for (int k = 0; k <= 32; ++k) {
         const double c = photons_per_um2_max * std::exp2(-0.5 * k);
-        std::vector<std::pair<uint64_t, double>> w;  // (N, weight), merged below
+        // Weights by photon count (counts above the table run the chain).
+        std::vector<double> w(static_cast<size_t>(table.max_photons()) + 1, 0.0);
         double interp = 0.0;
         for (int i = 0; i < zn; ++i) {
             const double z   = zn > 1 ? -5.0 + 10.0 * i / (zn - 1) : 0.0;
@@ -91,21 +92,17 @@ double table_density_error(const Population& pop, const DevelopTable& table,
             if (n0 > n1)
                 continue;
             poisson_terms(lam, n0, n1, [&](uint64_t n, double p) {
-                w.emplace_back(n, pdf * a * p);
+                w[static_cast<size_t>(n)] += pdf * a * p;
                 if (!table.is_node(n))
                     interp += pdf * a * p * table.max_interpolation_error();
             });
         }
-        std::sort(w.begin(), w.end());
         double var = 0.0;
-        for (size_t i = 0; i < w.size();) {
-            uint64_t n   = w[i].first;
-            double total = 0.0;
-            for (; i < w.size() && w[i].first == n; ++i)
-                total += w[i].second;
-            const double se = table.standard_error(n);
-            var += total * total * se * se;
-        }
+        for (size_t n = 0; n < w.size(); ++n)
+            if (w[n] > 0.0) {
+                const double se = table.standard_error(n);
+                var += w[n] * w[n] * se * se;
+            }
         worst = std::max(worst, kLog10E * pop.grains_per_um2 * (2.0 * std::sqrt(var) + interp));
     }
     return worst;

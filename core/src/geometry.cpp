@@ -69,13 +69,9 @@ PopulationGrains::PopulationGrains(const Population& pop, uint64_t seed, uint32_
 
     const auto radius_at = [&](double z) { return 0.5 * std::exp(m_log_median_um + s * z); };
     const auto add_bin   = [&](double z_lo, double z_hi, double probability) {
-        Bin bin;
-        bin.z_lo           = z_lo;
-        bin.z_hi           = z_hi;
-        bin.grains_per_um2 = lam * probability;
-        bin.max_radius_um  = radius_at(z_hi);
-        bin.cell_um        = std::sqrt(kGrainsPerCell / bin.grains_per_um2);
-        m_bins.push_back(bin);
+        m_bins.push_back(Bin { z_lo, z_hi, lam * probability, radius_at(z_hi),
+                               std::sqrt(kGrainsPerCell / (lam * probability)),
+                               TruncatedNormal(z_lo, z_hi) });
     };
 
     // Bins are only needed where diameters differ enough to matter for the
@@ -114,7 +110,7 @@ void PopulationGrains::cell_grains(size_t bin_index, int64_t cx, int64_t cy,
         g.x_um = (static_cast<double>(cx) + rng.uniform()) * bin.cell_um;
         g.y_um = (static_cast<double>(cy) + rng.uniform()) * bin.cell_um;
         const double z
-            = m_log_sigma > 0.0 ? sample_truncated_normal(bin.z_lo, bin.z_hi, rng.uniform()) : 0.0;
+            = m_log_sigma > 0.0 ? bin.z.sample(rng.uniform()) : 0.0;
         g.radius_um = 0.5 * std::exp(m_log_median_um + m_log_sigma * z);
         g.id        = hash_combine(cell_id, i);
         out.push_back(g);

@@ -8,6 +8,7 @@
 
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
+#include "sampling.h"
 
 namespace filmgrain {
 
@@ -90,6 +91,7 @@ public:
         double grains_per_um2;  ///< intensity of this bin's process
         double max_radius_um;   ///< radius at z_hi
         double cell_um;         ///< side of this bin's square cells
+        TruncatedNormal z;      ///< z restricted to the bin
     };
     const std::vector<Bin>& bins() const { return m_bins; }
 

@@ -316,91 +316,139 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
     const auto col = [&](double x) { return static_cast<int64_t>(std::floor(x / px_um)); };
     const auto row = [&](double y) { return static_cast<int64_t>(std::floor(y / py_um)); };
 
-    // 1. Bucket the discs by the pixels their bounding boxes touch, to find
-    //    each disc's neighbours without testing every pair.
+    // 1. Neighbours. Disc centres are bucketed on a grid of cells twice the
+    //    typical radius; a disc's overlapping neighbours then lie in the
+    //    cells within its radius plus the largest typical radius. The rare
+    //    discs much larger than typical ("big") are kept apart and tested
+    //    against every disc, so one giant grain does not widen every query.
     auto& offsets = scratch.cell_offsets;
     auto& fill    = scratch.cell_fill;
     auto& members = scratch.cell_discs;
-    offsets.assign(static_cast<size_t>(tw * th + 1), 0);
-    const auto for_cells = [&](const Disc& d, auto&& f) {
-        const int64_t cx0 = std::max(x0, col(d.x_um - d.r_um)), cx1 = std::min(x1 - 1, col(d.x_um + d.r_um));
-        const int64_t cy0 = std::max(y0, row(d.y_um - d.r_um)), cy1 = std::min(y1 - 1, row(d.y_um + d.r_um));
-        for (int64_t cy = cy0; cy <= cy1; ++cy)
-            for (int64_t cx = cx0; cx <= cx1; ++cx)
-                f(static_cast<size_t>((cy - y0) * tw + (cx - x0)));
-    };
+    auto& big     = scratch.stamp;  // indices of the big discs
+    big.clear();
+    double r_ref = 0.0;
     for (const Disc& d : discs)
-        for_cells(d, [&](size_t c) { ++offsets[c + 1]; });
+        r_ref += d.r_um;
+    r_ref = discs.empty() ? 1.0 : std::max(r_ref / static_cast<double>(discs.size()), 1e-9);
+    const double r_small = 3.0 * r_ref;  // larger discs are "big"
+    const double cell    = 2.0 * r_ref;
+    const double gx0 = static_cast<double>(x0) * px_um - r_small;
+    const double gy0 = static_cast<double>(y0) * py_um - r_small;
+    const int64_t gw = static_cast<int64_t>(std::ceil((static_cast<double>(x1) * px_um + r_small - gx0) / cell)) + 1;
+    const int64_t gh = static_cast<int64_t>(std::ceil((static_cast<double>(y1) * py_um + r_small - gy0) / cell)) + 1;
+    const auto gcol = [&](double x) {
+        return std::clamp<int64_t>(static_cast<int64_t>(std::floor((x - gx0) / cell)), 0, gw - 1);
+    };
+    const auto grow = [&](double y) {
+        return std::clamp<int64_t>(static_cast<int64_t>(std::floor((y - gy0) / cell)), 0, gh - 1);
+    };
+    offsets.assign(static_cast<size_t>(gw * gh + 1), 0);
+    for (size_t i = 0; i < discs.size(); ++i) {
+        if (discs[i].r_um > r_small)
+            big.push_back(i);
+        else
+            ++offsets[static_cast<size_t>(grow(discs[i].y_um) * gw + gcol(discs[i].x_um)) + 1];
+    }
     for (size_t c = 1; c < offsets.size(); ++c)
         offsets[c] += offsets[c - 1];
     members.resize(offsets.back());
     fill.assign(offsets.begin(), offsets.end() - 1);
     for (size_t i = 0; i < discs.size(); ++i)
-        for_cells(discs[i], [&](size_t c) { members[fill[c]++] = i; });
+        if (discs[i].r_um <= r_small)
+            members[fill[static_cast<size_t>(grow(discs[i].y_um) * gw + gcol(discs[i].x_um))]++] = i;
 
     // 2. Visible arcs of each disc, cut where the circle crosses the pixel
     //    grid; each piece lies in one pixel and adds its Green term there
     //    (in the pixel's own coordinates, so its left and bottom edges add
     //    nothing below).
-    auto& stamp = scratch.stamp;
-    stamp.assign(discs.size(), SIZE_MAX);
     std::vector<size_t> candidates;
     ArcSet hidden;
     auto& crossings = scratch.crossings;
     for (size_t i = 0; i < discs.size(); ++i) {
         const Disc& d = discs[i];
-        candidates.clear();
-        for_cells(d, [&](size_t c) {
-            for (size_t k = offsets[c]; k < offsets[c + 1]; ++k)
-                if (stamp[members[k]] != i) {
-                    stamp[members[k]] = i;
-                    candidates.push_back(members[k]);
-                }
-        });
+        candidates.assign(big.begin(), big.end());
+        const double reach = d.r_um + r_small;
+        const int64_t ca = gcol(d.x_um - reach), cb = gcol(d.x_um + reach);
+        for (int64_t gy = grow(d.y_um - reach), gy1 = grow(d.y_um + reach); gy <= gy1; ++gy) {
+            const size_t c0 = static_cast<size_t>(gy * gw + ca), c1 = static_cast<size_t>(gy * gw + cb);
+            candidates.insert(candidates.end(), members.begin() + static_cast<std::ptrdiff_t>(offsets[c0]),
+                              members.begin() + static_cast<std::ptrdiff_t>(offsets[c1 + 1]));
+        }
         // (The candidates' order does not matter: the hidden intervals are
         // sorted before use, and ties between identical discs are broken by
         // index.)
         if (!hidden_arcs(discs, i, candidates.data(), candidates.size(), hidden))
             continue;
-        // Angles where the circle meets grid lines inside the block's span.
+        // Points where the circle meets grid lines inside the block's span,
+        // with their cosine and sine known algebraically (a vertical line
+        // fixes the cosine, a horizontal one the sine).
         crossings.clear();
-        const auto add_line = [&](double offset, double phase) {
+        const auto add_line = [&](double offset, bool vertical) {
             const double t = offset / d.r_um;
             if (!(t > -1.0 && t < 1.0))
                 return;
-            const double a = std::acos(t);
-            for (double th : { phase + a, phase - a }) {
-                th -= 2.0 * M_PI * std::floor(th / (2.0 * M_PI));
-                crossings.push_back(th);
+            const double a = std::acos(t), root = std::sqrt((1.0 - t) * (1.0 + t));
+            if (vertical) {  // cos = t at +-a
+                crossings.push_back({ a, t, root });
+                crossings.push_back({ 2.0 * M_PI - a, t, -root });
+            } else {  // sin = t at pi/2 -+ a
+                crossings.push_back({ 0.5 * M_PI + a, -root, t });
+                const double b = 0.5 * M_PI - a;
+                crossings.push_back({ b < 0.0 ? b + 2.0 * M_PI : b, root, t });
             }
         };
         for (int64_t k = std::max(x0, col(d.x_um - d.r_um)); k <= std::min(x1, col(d.x_um + d.r_um) + 1); ++k)
-            add_line(static_cast<double>(k) * px_um - d.x_um, 0.0);
+            add_line(static_cast<double>(k) * px_um - d.x_um, true);
         for (int64_t m = std::max(y0, row(d.y_um - d.r_um)); m <= std::min(y1, row(d.y_um + d.r_um) + 1); ++m)
-            add_line(static_cast<double>(m) * py_um - d.y_um, 0.5 * M_PI);
-        crossings.push_back(0.0);
-        crossings.push_back(2.0 * M_PI);
-        std::sort(crossings.begin(), crossings.end());
+            add_line(static_cast<double>(m) * py_um - d.y_um, false);
+        std::sort(crossings.begin(), crossings.end(),
+                  [](const ArcPoint& u, const ArcPoint& v) { return u.angle < v.angle; });
         // Visible = gaps between the hidden intervals.
         auto& arcs = hidden.arcs;
         std::sort(arcs.begin(), arcs.end());
-        const auto emit = [&](double a, double b) {
-            // Cut [a, b] at the crossings; deposit each piece.
-            auto it = std::upper_bound(crossings.begin(), crossings.end(), a);
-            double lo = a;
-            while (lo < b) {
-                const double hi = (it != crossings.end() && *it < b) ? *it++ : b;
-                if (hi > lo) {
-                    const double mid = 0.5 * (lo + hi);
-                    const int64_t ix = col(d.x_um + d.r_um * std::cos(mid));
-                    const int64_t iy = row(d.y_um + d.r_um * std::sin(mid));
-                    if (ix >= x0 && ix < x1 && iy >= y0 && iy < y1)
-                        area[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
-                            += arc_term(d.x_um - static_cast<double>(ix) * px_um,
-                                        d.y_um - static_cast<double>(iy) * py_um, d.r_um, lo, hi);
-                }
-                lo = hi;
+        const auto point_at = [](double angle) {
+            return ArcPoint { angle, std::cos(angle), std::sin(angle) };
+        };
+        // Deposits the Green term of the arc piece [p, q], lying in one
+        // pixel, in that pixel's coordinates.
+        const auto deposit = [&](const ArcPoint& p, const ArcPoint& q) {
+            const double span = q.angle - p.angle;
+            if (!(span > 0.0))
+                return;
+            // The piece's middle: along u_p + u_q (its chord's direction from
+            // the centre), reversed beyond a half turn; near a half turn that
+            // sum vanishes and the angle is used instead.
+            double mx = p.c + q.c, my = p.s + q.s;
+            const double n = std::sqrt(mx * mx + my * my);
+            if (n < 1e-3) {
+                const double mid = 0.5 * (p.angle + q.angle);
+                mx = std::cos(mid);
+                my = std::sin(mid);
+            } else {
+                const double sign = span > M_PI ? -1.0 : 1.0;
+                mx *= sign / n;
+                my *= sign / n;
             }
+            const int64_t ix = col(d.x_um + d.r_um * mx);
+            const int64_t iy = row(d.y_um + d.r_um * my);
+            if (ix < x0 || ix >= x1 || iy < y0 || iy >= y1)
+                return;
+            const double lx = d.x_um - static_cast<double>(ix) * px_um;
+            const double ly = d.y_um - static_cast<double>(iy) * py_um;
+            area[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
+                += 0.5 * (d.r_um * d.r_um * span + lx * d.r_um * (q.s - p.s)
+                          - ly * d.r_um * (q.c - p.c));
+        };
+        // Cuts the visible arc [a, b] at the crossings.
+        const auto emit = [&](double a, double b) {
+            ArcPoint lo = point_at(a);
+            auto it     = std::upper_bound(crossings.begin(), crossings.end(), a,
+                                           [](double v, const ArcPoint& u) { return v < u.angle; });
+            for (; it != crossings.end() && it->angle < b; ++it) {
+                deposit(lo, *it);
+                lo = *it;
+            }
+            deposit(lo, point_at(b));
         };
         double cursor = 0.0;
         for (const auto& [a, b] : arcs) {

@@ -52,11 +52,17 @@ void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, i
                        int64_t y1, double px_um, double py_um, int samples,
                        ScanlineScratch& scratch, double* fraction);
 
+/// A point on a circle: its angle in [0, 2 pi] and, computed once, its
+/// cosine and sine.
+struct ArcPoint {
+    double angle, c, s;
+};
+
 /// Scratch space for grid_coverage, reused between calls.
 struct GridCoverageScratch {
     std::vector<size_t> cell_offsets, cell_fill, cell_discs, stamp;
     std::vector<std::pair<double, double>> arcs;
-    std::vector<double> crossings;
+    std::vector<ArcPoint> crossings;
     std::vector<size_t> line_offsets, line_fill;
     std::vector<std::pair<double, double>> line_chords;
     std::vector<double> area;

@@ -64,19 +64,26 @@ double normal_quantile(double p)
     return q < 0.0 ? -val : val;
 }
 
+TruncatedNormal::TruncatedNormal(double z_lo, double z_hi)
+    : m_z_lo(z_lo)
+    , m_z_hi(z_hi)
+    , m_upper(z_lo >= 0.0)
+    , m_c_lo(m_upper ? normal_upper_tail(z_lo) : normal_cdf(z_lo))
+    , m_c_hi(m_upper ? normal_upper_tail(z_hi) : normal_cdf(z_hi))
+{
+}
+
+double TruncatedNormal::sample(double u) const
+{
+    // Upper tail: invert Q to keep precision where Phi is close to 1.
+    const double z = m_upper ? -normal_quantile(m_c_hi + u * (m_c_lo - m_c_hi))
+                             : normal_quantile(m_c_lo + u * (m_c_hi - m_c_lo));
+    return std::fmin(std::fmax(z, m_z_lo), m_z_hi);
+}
+
 double sample_truncated_normal(double z_lo, double z_hi, double u)
 {
-    if (z_lo >= 0.0) {
-        // Upper tail: invert Q to keep precision where Phi is close to 1.
-        const double q_hi = normal_upper_tail(z_hi);
-        const double q_lo = normal_upper_tail(z_lo);
-        const double z    = -normal_quantile(q_hi + u * (q_lo - q_hi));
-        return std::fmin(std::fmax(z, z_lo), z_hi);
-    }
-    const double p_lo = normal_cdf(z_lo);
-    const double p_hi = normal_cdf(z_hi);
-    const double z    = normal_quantile(p_lo + u * (p_hi - p_lo));
-    return std::fmin(std::fmax(z, z_lo), z_hi);
+    return TruncatedNormal(z_lo, z_hi).sample(u);
 }
 
 namespace {

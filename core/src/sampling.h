@@ -22,7 +22,20 @@ double normal_quantile(double p);
 
 /// A standard normal z restricted to (z_lo, z_hi], drawn by inverting the
 /// CDF at uniform u in [0, 1). z_lo may be -inf. Accurate in the upper tail
-/// (uses Q when z_lo >= 0), which is where radius bins live.
+/// (uses Q when z_lo >= 0), which is where radius bins live. The CDF at the
+/// bounds is computed once, at construction. Thread safety: const.
+class TruncatedNormal {
+public:
+    TruncatedNormal(double z_lo, double z_hi);
+    double sample(double u) const;
+
+private:
+    double m_z_lo, m_z_hi;
+    bool m_upper;       ///< invert Q rather than Phi
+    double m_c_lo, m_c_hi;  ///< Phi (or Q) at the bounds
+};
+
+/// TruncatedNormal(z_lo, z_hi).sample(u).
 double sample_truncated_normal(double z_lo, double z_hi, double u);
 
 /// Exactly Poisson(mean) distributed count. Inversion for mean < 10,
