@@ -127,10 +127,10 @@ InputRegion input_region(const ImageView& input, const FrameGeometry& frame, con
         return std::clamp<int64_t>(static_cast<int64_t>(std::clamp(std::floor(v), -1.0, 9e18)), 0, n);
     };
     InputRegion out;
-    out.x0 = clip((r.x0_um - margin_um) / p, input.width);
-    out.x1 = clip((r.x1_um + margin_um) / p + 1, input.width);
-    out.y0 = clip((r.y0_um - margin_um) / p, input.height);
-    out.y1 = clip((r.y1_um + margin_um) / p + 1, input.height);
+    out.x0 = clip((r.x0_um - margin_um) / p, input.frame_width());
+    out.x1 = clip((r.x1_um + margin_um) / p + 1, input.frame_width());
+    out.y0 = clip((r.y0_um - margin_um) / p, input.frame_height());
+    out.y1 = clip((r.y1_um + margin_um) / p + 1, input.frame_height());
     return out;
 }
 

@@ -67,8 +67,8 @@ LayerExposure::LayerExposure(const ImageView& input, const std::array<double, 3>
 double LayerExposure::value_at(double x_um, double y_um) const
 {
     const double fx = std::floor(x_um / m_pitch_um), fy = std::floor(y_um / m_pitch_um);
-    if (fx < 0.0 || fy < 0.0 || fx >= static_cast<double>(m_input.width)
-        || fy >= static_cast<double>(m_input.height))
+    if (fx < 0.0 || fy < 0.0 || fx >= static_cast<double>(m_input.frame_width())
+        || fy >= static_cast<double>(m_input.frame_height()))
         return 0.0;
     return value(static_cast<int64_t>(fx), static_cast<int64_t>(fy));
 }
@@ -77,7 +77,8 @@ double LayerExposure::integrate_over_disc(double cx_um, double cy_um, double r_u
 {
     const double p = m_pitch_um;
     // Input pixels the disc's bounding box touches, clipped to the image.
-    const double w = static_cast<double>(m_input.width), h = static_cast<double>(m_input.height);
+    const double w = static_cast<double>(m_input.frame_width());
+    const double h = static_cast<double>(m_input.frame_height());
     const double fx0 = std::floor((cx_um - r_um) / p), fx1 = std::floor((cx_um + r_um) / p);
     const double fy0 = std::floor((cy_um - r_um) / p), fy1 = std::floor((cy_um + r_um) / p);
     if (fx1 < 0.0 || fy1 < 0.0 || fx0 >= w || fy0 >= h)

@@ -36,7 +36,8 @@ public:
     LayerExposure(const ImageView& input, const std::array<double, 3>& sensitivity,
                   double input_pitch_um);
 
-    /// v of input pixel (ix, iy), which must lie inside the image.
+    /// v of input pixel (ix, iy) (whole-image coordinates), which must lie
+    /// inside the view's window.
     double value(int64_t ix, int64_t iy) const
     {
         const float* p = m_input.pixel(ix, iy);

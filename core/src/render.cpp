@@ -390,6 +390,19 @@ InputStats scan_input(const ImageView& input, const InputRegion& r)
     return s;
 }
 
+/// The largest grain radius any population of the stock generates: the
+/// margin around a region within which grains can reach into it.
+double max_radius_um(const Stock& stock, const SceneSettings& scene)
+{
+    double r = 0.0;
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
+            r = std::max(r, PopulationGrains(stock.layers[l].populations[p], scene.seed,
+                                             static_cast<uint32_t>(l), static_cast<uint32_t>(p))
+                                .max_radius_um());
+    return r;
+}
+
 Status validate_request(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                         const RenderSettings& settings, const float* density)
 {
@@ -401,9 +414,15 @@ Status validate_request(const Stock& stock, const SceneSettings& scene, const Im
         return s;
     if (!input.pixels)
         return Status::error("input image has no pixels (null buffer)");
-    if (input.width <= 0 || input.height <= 0)
-        return Status::errorf("input image is ", input.width, "x", input.height,
+    if (input.frame_width() <= 0 || input.frame_height() <= 0)
+        return Status::errorf("input image is ", input.frame_width(), "x", input.frame_height(),
                               ": must have at least one pixel");
+    if (input.width < 0 || input.height < 0 || input.x_origin < 0 || input.y_origin < 0
+        || input.x_origin + input.width > input.frame_width()
+        || input.y_origin + input.height > input.frame_height())
+        return Status::errorf("input window ", input.width, "x", input.height, " at ",
+                              input.x_origin, ",", input.y_origin, " lies outside the ",
+                              input.frame_width(), "x", input.frame_height(), " image");
     if (input.channels != 1 && input.channels < 3)
         return Status::errorf("input image has ", input.channels,
                               " channels: expected 1 (grey) or 3 or more (R, G, B first)");
@@ -414,6 +433,33 @@ Status validate_request(const Stock& stock, const SceneSettings& scene, const Im
 
 }  // namespace
 
+Status required_input_window(const Stock& stock, const SceneSettings& scene,
+                             int64_t input_width, int64_t input_height,
+                             const RenderSettings& settings, Roi& out)
+{
+    try {
+        if (Status s = stock.validate(); !s)
+            return Status::errorf("stock '", stock.name, "': ", s.message());
+        if (Status s = scene.validate(); !s)
+            return s;
+        FrameGeometry frame;
+        if (Status s = FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
+                                           settings.scan_width, settings.scan_height, frame);
+            !s)
+            return s;
+        const Roi roi = settings.roi.empty() ? Roi { 0, 0, frame.scan_width, frame.scan_height }
+                                             : settings.roi;
+        ImageView whole;
+        whole.width  = input_width;
+        whole.height = input_height;
+        const InputRegion r = input_region(whole, frame, roi, max_radius_um(stock, scene));
+        out                 = Roi { r.x0, r.y0, std::max(r.x0, r.x1), std::max(r.y0, r.y1) };
+        return {};
+    } catch (const std::exception& e) {
+        return Status::errorf("required_input_window: ", e.what());
+    }
+}
+
 Status render_negative(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                        const RenderSettings& settings, float* density, RenderStats* stats)
 {
@@ -421,8 +467,9 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (Status s = validate_request(stock, scene, input, settings, density); !s)
             return s;
         FrameGeometry frame;
-        if (Status s = FrameGeometry::make(scene.frame_width_mm, input.width, input.height,
-                                           settings.scan_width, settings.scan_height, frame);
+        if (Status s = FrameGeometry::make(scene.frame_width_mm, input.frame_width(),
+                                           input.frame_height(), settings.scan_width,
+                                           settings.scan_height, frame);
             !s)
             return s;
         Roi roi = settings.roi;
@@ -434,6 +481,18 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
                                   roi.height(), " (x,y,w,h) lies outside the ", frame.scan_width,
                                   "x", frame.scan_height, " scan");
         }
+
+        // The window must hold every input pixel the render reads.
+        const InputRegion need = input_region(input, frame, roi, max_radius_um(stock, scene));
+        if (need.x1 > need.x0 && need.y1 > need.y0
+            && (need.x0 < input.x_origin || need.y0 < input.y_origin
+                || need.x1 > input.x_origin + input.width
+                || need.y1 > input.y_origin + input.height))
+            return Status::errorf("input window ", input.width, "x", input.height, " at ",
+                                  input.x_origin, ",", input.y_origin,
+                                  " does not cover the input pixels the render reads: [",
+                                  need.x0, ", ", need.x1, ") x [", need.y0, ", ", need.y1,
+                                  ") (see required_input_window)");
 
         const auto start = std::chrono::steady_clock::now();
         std::vector<LayerPlan> plan;
@@ -497,11 +556,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (stats) {
             renderer.fill_stats(*stats);
             stats->engine = engine_name(settings.engine);
-            double margin = 0.0;
-            for (const LayerPlan& l : plan)
-                for (const PopulationPlan& p : l.populations)
-                    margin = std::max(margin, p.grains.max_radius_um());
-            stats->input = scan_input(input, input_region(input, frame, roi, margin));
+            stats->input = scan_input(input, need);
             stats->simulate_seconds
                 = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         }

@@ -80,6 +80,31 @@ TEST(Render, BitIdenticalForThreadsAndTiles)
         EXPECT_TRUE(std::isfinite(v));
 }
 
+TEST(Render, EarlyStopIsBitIdenticalToTheExactEngine)
+{
+    // The chain stopped once a grain's fate is decided makes exactly the
+    // full chain's decisions (the develop uniform is drawn first and n4
+    // never decreases); with exact exposure and coverage the image must be
+    // the exact engine's, bit for bit.
+    const Scene s = small_scene();
+    RenderSettings exact;
+    exact.engine = Engine::exact;
+    RenderSettings early;
+    early.engine          = Engine::automatic;
+    early.kinetics        = KineticsMethod::early_stop;
+    early.exposure_method = ExposureMethod::disc;
+    early.coverage        = CoverageMethod::exact;
+    RenderStats se, sl;
+    const auto a = render(s, exact, &se);
+    const auto b = render(s, early, &sl);
+    EXPECT_TRUE(bit_identical(a, b));
+    for (size_t l = 0; l < se.layers.size(); ++l) {
+        EXPECT_EQ(se.layers[l].developed, sl.layers[l].developed);
+        EXPECT_LT(sl.layers[l].kinetics_events, se.layers[l].kinetics_events);
+        EXPECT_EQ(sl.layers[l].error_estimate, 0.0);
+    }
+}
+
 TEST(Render, RoiIsACropOfTheFullRender)
 {
     const Scene s = small_scene();
@@ -98,6 +123,42 @@ TEST(Render, RoiIsACropOfTheFullRender)
                 const float b = crop[((y - 5) * part.roi.width() + (x - 13)) * nl + l];
                 ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << x << "," << y << " layer " << l;
             }
+}
+
+TEST(Render, AWindowOfTheInputIsEnough)
+{
+    // A ROI render that is given only the input window it needs (as a
+    // caller holding part of a huge input would) is bit-identical to one
+    // given the whole input; a window too small is refused.
+    const Scene s = small_scene();
+    RenderSettings settings;
+    settings.roi = Roi { 20, 10, 30, 18 };
+    Roi w;
+    ASSERT_TRUE(required_input_window(s.stock, s.scene, 48, 32, settings, w));
+    EXPECT_GT(w.x_begin, 0);
+    EXPECT_LT(w.x_end, 48);
+    std::vector<float> window;
+    for (int64_t y = w.y_begin; y < w.y_end; ++y)
+        for (int64_t x = w.x_begin; x < w.x_end; ++x)
+            for (int c = 0; c < 3; ++c)
+                window.push_back(s.pixels[(y * 48 + x) * 3 + c]);
+    Scene part  = s;
+    part.pixels = window;
+    part.view   = ImageView { part.pixels.data(), w.width(), w.height(), 3 };
+    part.view.x_origin    = w.x_begin;
+    part.view.y_origin    = w.y_begin;
+    part.view.full_width  = 48;
+    part.view.full_height = 32;
+    const auto whole = render(s, settings);
+    const auto from_window = render(part, settings);
+    EXPECT_TRUE(bit_identical(whole, from_window));
+
+    ImageView small = part.view;
+    small.width -= 1;  // one column short
+    std::vector<float> out(whole.size());
+    const Status st = render_negative(s.stock, s.scene, small, settings, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("does not cover"), std::string::npos) << st.message();
 }
 
 TEST(Render, AnotherSeedGivesAnotherImage)

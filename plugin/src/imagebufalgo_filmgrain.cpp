@@ -29,10 +29,10 @@ namespace IBA {
 
 namespace {
 
-/// src's data window as packed float pixels: 1 channel (grey) or the first
-/// 3 channels. On failure returns false with `error` set.
-bool pack_source(const OIIO::ImageBuf& src, std::vector<float>& pixels, ImageView& view,
-                 std::string& error)
+/// Checks src and returns the size of the whole image the film frame maps
+/// to: src's display (full) window, or its data window when none is set.
+bool source_frame(const OIIO::ImageBuf& src, int64_t& width, int64_t& height,
+                  std::string& error)
 {
     if (!src.initialized()) {
         error = src.has_error() ? src.geterror() : std::string("source image is empty");
@@ -50,20 +50,59 @@ bool pack_source(const OIIO::ImageBuf& src, std::vector<float>& pixels, ImageVie
                                            spec.depth);
         return false;
     }
+    width  = spec.full_width > 0 ? spec.full_width : spec.width;
+    height = spec.full_height > 0 ? spec.full_height : spec.height;
+    return true;
+}
+
+/// The input the render reads, as an ImageView in frame coordinates (0,0 =
+/// the display window's corner). When src holds float pixels in memory that
+/// cover the window and dst is another image, the view points straight into
+/// src (no copy); otherwise just the window is copied into `pixels`
+/// (pixels outside src's data window read as 0, OIIO's convention), so a
+/// cache-backed src is read only where the render looks.
+bool source_view(const OIIO::ImageBuf& src, bool dst_aliases_src, const Roi& window,
+                 int64_t frame_width, int64_t frame_height, std::vector<float>& pixels,
+                 ImageView& view, std::string& error)
+{
+    const OIIO::ImageSpec& spec = src.spec();
+    const int64_t fx = spec.full_width > 0 ? spec.full_x : spec.x;
+    const int64_t fy = spec.full_height > 0 ? spec.full_y : spec.y;
+    view             = ImageView();
+    view.full_width  = frame_width;
+    view.full_height = frame_height;
+    const int64_t dx0 = spec.x - fx, dy0 = spec.y - fy;
+    const bool covers = dx0 <= window.x_begin && dy0 <= window.y_begin
+                        && dx0 + spec.width >= window.x_end && dy0 + spec.height >= window.y_end
+                        && dx0 >= 0 && dy0 >= 0 && dx0 + spec.width <= frame_width
+                        && dy0 + spec.height <= frame_height;
+    if (!dst_aliases_src && covers && spec.format == OIIO::TypeFloat && src.localpixels()
+        && src.storage() == OIIO::ImageBuf::LOCALBUFFER) {
+        view.pixels   = static_cast<const float*>(src.localpixels());
+        view.width    = spec.width;
+        view.height   = spec.height;
+        view.channels = spec.nchannels;
+        view.x_stride = spec.nchannels;
+        view.y_stride = static_cast<int64_t>(spec.width) * spec.nchannels;
+        view.x_origin = dx0;
+        view.y_origin = dy0;
+        return true;
+    }
     const int nc = spec.nchannels == 1 ? 1 : 3;
-    OIIO::ROI roi = src.roi();
-    roi.chbegin   = 0;
-    roi.chend     = nc;
-    pixels.resize(static_cast<size_t>(roi.npixels()) * static_cast<size_t>(nc));
-    if (!src.get_pixels(roi, OIIO::TypeFloat, pixels.data())) {
+    OIIO::ROI roi(static_cast<int>(window.x_begin + fx), static_cast<int>(window.x_end + fx),
+                  static_cast<int>(window.y_begin + fy), static_cast<int>(window.y_end + fy), 0, 1,
+                  0, nc);
+    pixels.resize(static_cast<size_t>(std::max<int64_t>(1, window.npixels())) * nc);
+    if (!window.empty() && !src.get_pixels(roi, OIIO::TypeFloat, pixels.data())) {
         error = OIIO::Strutil::fmt::format("cannot read the source pixels: {}", src.geterror());
         return false;
     }
-    view          = ImageView();
     view.pixels   = pixels.data();
-    view.width    = roi.width();
-    view.height   = roi.height();
+    view.width    = window.width();
+    view.height   = window.height();
     view.channels = nc;
+    view.x_origin = window.x_begin;
+    view.y_origin = window.y_begin;
     return true;
 }
 
@@ -94,10 +133,9 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
                     const FilmgrainOptions& opts, OIIO::ROI roi, int nthreads,
                     RenderStats* stats)
 {
-    std::vector<float> packed;
-    ImageView view;
+    int64_t frame_width = 0, frame_height = 0;
     std::string error;
-    if (!pack_source(src, packed, view, error)) {
+    if (!source_frame(src, frame_width, frame_height, error)) {
         dst.errorfmt("filmgrain: {}", error);
         return false;
     }
@@ -116,7 +154,7 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     settings.progress     = opts.progress;
 
     ScanGeometry scan;
-    if (Status s = scan_geometry(opts.scene, view.width, view.height, settings, scan); !s) {
+    if (Status s = scan_geometry(opts.scene, frame_width, frame_height, settings, scan); !s) {
         dst.errorfmt("filmgrain: {}", s.message());
         return false;
     }
@@ -143,6 +181,21 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     }
     const int nlayers = static_cast<int>(opts.stock.layers.size());
 
+    // Only the input under the ROI (plus a grain radius) is read.
+    Roi window;
+    if (Status s = required_input_window(opts.stock, opts.scene, frame_width, frame_height,
+                                         settings, window);
+        !s) {
+        dst.errorfmt("filmgrain: {}", s.message());
+        return false;
+    }
+    std::vector<float> packed;
+    ImageView view;
+    if (!source_view(src, &dst == &src, window, frame_width, frame_height, packed, view, error)) {
+        dst.errorfmt("filmgrain: {}", error);
+        return false;
+    }
+
     OIIO::ImageSpec spec(roi.width(), roi.height(), nlayers, OIIO::TypeFloat);
     spec.x           = roi.xbegin;
     spec.y           = roi.ybegin;
@@ -155,7 +208,7 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
         spec.channelnames.push_back(layer.name);
     set_metadata(spec, opts);
 
-    // src has been read completely into `packed`: dst may alias it.
+    // When dst is src, the view is a copy in `packed`: resetting dst is safe.
     dst.reset(spec, OIIO::InitializePixels::No);
     float* density = static_cast<float*>(dst.localpixels());
     if (!density) {

@@ -55,6 +55,11 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     const ImageView input { &grey, 1, 1, 1 };
     RenderSettings rs;
     rs.engine     = settings.engine;
+    if (settings.kinetics) {
+        rs.kinetics        = settings.kinetics;
+        rs.exposure_method = ExposureMethod::disc;
+        rs.coverage        = CoverageMethod::exact;
+    }
     rs.nthreads   = settings.nthreads;
     rs.scan_width = scan_px;
     rs.scan_height = scan_px;

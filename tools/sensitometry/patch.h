@@ -11,6 +11,8 @@
 // the max_density clamp (clamped pixels are counted and reported).
 #pragma once
 
+#include <optional>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -24,6 +26,10 @@ namespace filmgrain::sensitometry {
 struct MeasureSettings {
     /// The engine that simulates the grains (its name goes into every output).
     Engine engine = Engine::exact;
+    /// Kinetics override (with engine auto or fast). early_stop with disc
+    /// exposure and exact coverage renders the exact engine's images bit for
+    /// bit, faster (core/src/render_test.cpp checks it).
+    std::optional<KineticsMethod> kinetics;
     /// Worker threads of each render; 0: all hardware threads.
     int nthreads = 0;
 };

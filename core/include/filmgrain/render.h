@@ -132,6 +132,16 @@ struct ScanGeometry {
 Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
                      const RenderSettings& settings, ScanGeometry& out);
 
+/// The input pixels, in whole-image coordinates, that a render of
+/// settings.roi (or the whole scan) reads: its film region grown by the
+/// largest grain radius, clipped to the image. A caller that holds only part
+/// of a large input (a 256x256 ROI of a 16K frame) reads, converts and
+/// passes just this window (ImageView's origin and full size), so memory
+/// and time follow the ROI. May be empty (a ROI beyond every input pixel).
+Status required_input_window(const Stock& stock, const SceneSettings& scene,
+                             int64_t input_width, int64_t input_height,
+                             const RenderSettings& settings, Roi& out);
+
 /// What happened in one layer. Grains are counted once each: those whose
 /// centre lies in the rendered region (grains outside it that reach into it
 /// are simulated but not counted).

@@ -108,9 +108,13 @@ namespace IBA {
 /// src: scene-linear pixels; 1 channel (grey, read as R = G = B) or at least
 ///   3 channels (R, G, B first; alpha and any further channels are ignored).
 ///   2-channel images are an error. Any pixel type (converted to float). The
-///   film frame covers src's data window: opts.scene.frame_width_mm across
-///   src's width, square src pixels. NaN and Inf channels expose nothing
-///   and are counted in stats->input.nonfinite_pixels.
+///   film frame covers src's display (full) window (its data window when no
+///   display window is set): opts.scene.frame_width_mm across it, square
+///   pixels; pixels outside the data window are black. Only the pixels under
+///   the ROI plus a grain radius are read (a cache-backed src is read only
+///   there); float pixels in memory are used in place, not copied. NaN and
+///   Inf channels expose nothing and are counted in
+///   stats->input.nonfinite_pixels.
 /// dst: (re)allocated as float with one channel per stock layer, named
 ///   after the layer (stock order): negative density, -log10(transmittance)
 ///   plus the stock's base density. Its full (display) window is the whole
