@@ -23,13 +23,19 @@ double quadrant_area(double x, double y, double r)
     const double r2 = r * r;
     if (x * x + y * y <= r2)
         return x * y;
-    // The circle's height at x is below y: columns [0, xc] are full height y,
-    // columns [xc, x] end on the circle. I(a) = integral_0^a sqrt(r^2-u^2) du.
-    const double xc = std::sqrt(std::max(0.0, r2 - y * y));
+    // I(a) = integral_0^a sqrt(r^2 - u^2) du: the area of the quarter disc
+    // below a (or left of a, by symmetry).
     const auto integral = [&](double a) {
         const double s = std::clamp(a / r, -1.0, 1.0);
         return 0.5 * (a * std::sqrt(std::max(0.0, r2 - a * a)) + r2 * std::asin(s));
     };
+    if (x >= r)  // the whole quarter disc's width: only y cuts it
+        return y >= r ? 0.25 * M_PI * r2 : integral(y);
+    if (y >= r)
+        return integral(x);
+    // The circle's height at x is below y: columns [0, xc] are full height y,
+    // columns [xc, x] end on the circle.
+    const double xc = std::sqrt(std::max(0.0, r2 - y * y));
     return y * xc + (integral(x) - integral(xc));
 }
 
