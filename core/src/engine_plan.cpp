@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <sstream>
+#include <tuple>
 
 #include "rng.h"
 
@@ -108,6 +110,41 @@ double table_density_error(const Population& pop, const DevelopTable& table,
     return worst;
 }
 
+/// Tables built in this process, by everything that determines their
+/// contents (rates, shutter, development, build options: the thread count
+/// does not change a table). A render with the same key gets the same table
+/// whether it is built or found, so results never depend on call history;
+/// frames of a sequence share it. Bounded: the oldest entries go first.
+std::shared_ptr<const DevelopTable> cached_table(const KineticsRates& rates, double shutter_s,
+                                                const Stock& stock,
+                                                const DevelopTable::Options& options)
+{
+    using Key = std::tuple<double, double, double, double, double, double, double, uint64_t,
+                           double, int, int, uint64_t, double, uint64_t, double, uint64_t>;
+    const Key key { rates.k_pair_per_s,        rates.k_join_per_s,   rates.k_loss_per_s,
+                    shutter_s,                 stock.development_time_s,
+                    stock.development_tau_s,   stock.fog_tau_s,      options.max_photons,
+                    options.target_standard_error, options.min_samples, options.max_samples,
+                    options.dense_photons,     options.node_ratio,   options.coarse_photons,
+                    options.coarse_ratio,      options.stream_key };
+    static std::mutex mutex;
+    static std::vector<std::pair<Key, std::shared_ptr<const DevelopTable>>> cache;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& [k, t] : cache)
+            if (k == key)
+                return t;
+    }
+    auto table = std::make_shared<const DevelopTable>(rates, shutter_s, Development(stock),
+                                                      options);
+    std::lock_guard<std::mutex> lock(mutex);
+    constexpr size_t kEntries = 16;
+    if (cache.size() >= kEntries)
+        cache.erase(cache.begin());
+    cache.emplace_back(key, table);
+    return table;
+}
+
 std::string format_g(double v)
 {
     std::ostringstream o;
@@ -139,7 +176,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                    std::vector<LayerPlan>& out)
 {
     out.clear();
-    const Development dev(stock);
     const double lxs_per_value
         = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
     const bool exact = settings.engine == Engine::exact;
@@ -243,8 +279,11 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             // 0.434 n E[a] e; nodes' errors partly average (estimated below).
             const double target = std::max(fast ? 5e-3 : 0.0,
                                            settings.tolerance / (kLog10E * n_mean_area));
-            const uint64_t n_max
-                = static_cast<uint64_t>(std::min<double>(n_need, kTablePhotonCap));
+            // Rounded up to a power of two so that frames of a sequence
+            // share one table (see cached_table).
+            uint64_t n_max = 64;
+            while (n_max < n_need && n_max < kTablePhotonCap)
+                n_max *= 2;
             size_t r = 0;
             while (r < requests.size()
                    && !(requests[r].rates.k_pair_per_s == pp.rates.k_pair_per_s
@@ -273,7 +312,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
 
     for (TableRequest& req : requests) {
         const auto t0 = std::chrono::steady_clock::now();
-        req.table     = std::make_shared<DevelopTable>(req.rates, scene.shutter_s, dev, req.options);
+        req.table     = cached_table(req.rates, scene.shutter_s, stock, req.options);
         req.seconds   = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     std::vector<bool> charged(requests.size(), false);
