@@ -270,15 +270,27 @@ void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, i
 
 namespace {
 
-/// Appends to `out` the angular intervals of circle i hidden inside other
-/// discs (candidates: indices into discs). Returns false if the whole
-/// circle is hidden.
-bool hidden_arcs(const std::vector<Disc>& discs, size_t i, const size_t* candidates,
-                 size_t ncandidates, ArcSet& out)
+/// A monotone stand-in for the angle of a unit vector (c, s): [0, 4) over
+/// [0, 2 pi), exact at the axes and half a turn apart exactly 2 apart
+/// ("diamond angle"), with no trigonometry.
+double pseudo_angle(double c, double s)
+{
+    if (s >= 0.0)
+        return c >= 0.0 ? s / (c + s) : 1.0 - c / (s - c);
+    return c < 0.0 ? 2.0 - s / (-c - s) : 3.0 + c / (c - s);
+}
+
+ArcPoint arc_point(double c, double s) { return { pseudo_angle(c, s), c, s }; }
+
+/// The intervals of circle i hidden inside other discs, as pairs of points
+/// (ordered by pseudo-angle; one crossing the start of the circle is cut
+/// in two). Returns false if the whole circle is hidden.
+bool hidden_intervals(const std::vector<Disc>& discs, size_t i, const size_t* candidates,
+                      size_t ncandidates, std::vector<std::pair<ArcPoint, ArcPoint>>& out)
 {
     const Disc& di = discs[i];
     out.clear();
-    for (size_t k = 0; k < ncandidates && !out.all; ++k) {
+    for (size_t k = 0; k < ncandidates; ++k) {
         const size_t j = candidates[k];
         if (j == i)
             continue;
@@ -292,16 +304,28 @@ bool hidden_arcs(const std::vector<Disc>& discs, size_t i, const size_t* candida
         if (dist + di.r_um <= dj.r_um) {
             // i lies inside j; of two identical discs the later is hidden.
             if (di.r_um < dj.r_um || dist > 0.0 || j < i)
-                out.all = true;
+                return false;
             continue;
         }
         if (dist + dj.r_um <= di.r_um)
             continue;  // j lies inside i
-        const double c = (di.r_um * di.r_um + dist * dist - dj.r_um * dj.r_um)
-                         / (2.0 * di.r_um * dist);
-        out.exclude(std::atan2(dy, dx), std::acos(std::clamp(c, -1.0, 1.0)));
+        // The two intersection points: the direction to j turned by -+w,
+        // cos w = (ri^2 + d^2 - rj^2) / (2 ri d).
+        const double cw = std::clamp((di.r_um * di.r_um + d2 - dj.r_um * dj.r_um)
+                                         / (2.0 * di.r_um * dist),
+                                     -1.0, 1.0);
+        const double sw = std::sqrt((1.0 - cw) * (1.0 + cw));
+        const double ux = dx / dist, uy = dy / dist;
+        const ArcPoint a = arc_point(ux * cw + uy * sw, uy * cw - ux * sw);
+        const ArcPoint b = arc_point(ux * cw - uy * sw, uy * cw + ux * sw);
+        if (a.angle <= b.angle) {
+            out.emplace_back(a, b);
+        } else {  // across the start of the circle
+            out.emplace_back(a, ArcPoint { 4.0, 1.0, 0.0 });
+            out.emplace_back(ArcPoint { 0.0, 1.0, 0.0 }, b);
+        }
     }
-    return !out.all;
+    return true;
 }
 
 }  // namespace
@@ -362,7 +386,7 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
     //    (in the pixel's own coordinates, so its left and bottom edges add
     //    nothing below).
     std::vector<size_t> candidates;
-    ArcSet hidden;
+    std::vector<std::pair<ArcPoint, ArcPoint>> hidden;
     auto& crossings = scratch.crossings;
     for (size_t i = 0; i < discs.size(); ++i) {
         const Disc& d = discs[i];
@@ -377,53 +401,51 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
         // (The candidates' order does not matter: the hidden intervals are
         // sorted before use, and ties between identical discs are broken by
         // index.)
-        if (!hidden_arcs(discs, i, candidates.data(), candidates.size(), hidden))
+        if (!hidden_intervals(discs, i, candidates.data(), candidates.size(), hidden))
             continue;
         // Points where the circle meets grid lines inside the block's span,
-        // with their cosine and sine known algebraically (a vertical line
-        // fixes the cosine, a horizontal one the sine).
+        // their cosine and sine known algebraically (a vertical line fixes
+        // the cosine, a horizontal one the sine).
         crossings.clear();
         const auto add_line = [&](double offset, bool vertical) {
             const double t = offset / d.r_um;
             if (!(t > -1.0 && t < 1.0))
                 return;
-            const double a = std::acos(t), root = std::sqrt((1.0 - t) * (1.0 + t));
-            if (vertical) {  // cos = t at +-a
-                crossings.push_back({ a, t, root });
-                crossings.push_back({ 2.0 * M_PI - a, t, -root });
-            } else {  // sin = t at pi/2 -+ a
-                crossings.push_back({ 0.5 * M_PI + a, -root, t });
-                const double b = 0.5 * M_PI - a;
-                crossings.push_back({ b < 0.0 ? b + 2.0 * M_PI : b, root, t });
+            const double root = std::sqrt((1.0 - t) * (1.0 + t));
+            if (vertical) {
+                crossings.push_back(arc_point(t, root));
+                crossings.push_back(arc_point(t, -root));
+            } else {
+                crossings.push_back(arc_point(root, t));
+                crossings.push_back(arc_point(-root, t));
             }
         };
         for (int64_t k = std::max(x0, col(d.x_um - d.r_um)); k <= std::min(x1, col(d.x_um + d.r_um) + 1); ++k)
             add_line(static_cast<double>(k) * px_um - d.x_um, true);
         for (int64_t m = std::max(y0, row(d.y_um - d.r_um)); m <= std::min(y1, row(d.y_um + d.r_um) + 1); ++m)
             add_line(static_cast<double>(m) * py_um - d.y_um, false);
-        std::sort(crossings.begin(), crossings.end(),
-                  [](const ArcPoint& u, const ArcPoint& v) { return u.angle < v.angle; });
-        // Visible = gaps between the hidden intervals.
-        auto& arcs = hidden.arcs;
-        std::sort(arcs.begin(), arcs.end());
-        const auto point_at = [](double angle) {
-            return ArcPoint { angle, std::cos(angle), std::sin(angle) };
-        };
-        // Deposits the Green term of the arc piece [p, q], lying in one
-        // pixel, in that pixel's coordinates.
-        const auto deposit = [&](const ArcPoint& p, const ArcPoint& q) {
-            const double span = q.angle - p.angle;
+        const auto by_angle = [](const ArcPoint& u, const ArcPoint& v) { return u.angle < v.angle; };
+        std::sort(crossings.begin(), crossings.end(), by_angle);
+        std::sort(hidden.begin(), hidden.end(),
+                  [](const auto& u, const auto& v) { return u.first.angle < v.first.angle; });
+        // Deposits the Green term of the arc piece from p to q
+        // (counterclockwise), lying in one pixel, in that pixel's
+        // coordinates. `full` marks the whole circle (p == q).
+        const auto deposit = [&](const ArcPoint& p, const ArcPoint& q, bool full) {
+            const double cross = p.c * q.s - p.s * q.c, dot = p.c * q.c + p.s * q.s;
+            double span        = full ? 2.0 * M_PI : std::atan2(cross, dot);
+            if (span < 0.0)
+                span += 2.0 * M_PI;
             if (!(span > 0.0))
                 return;
-            // The piece's middle: along u_p + u_q (its chord's direction from
-            // the centre), reversed beyond a half turn; near a half turn that
-            // sum vanishes and the angle is used instead.
+            // The piece's middle: along u_p + u_q, reversed beyond a half
+            // turn; near a half turn that sum vanishes: turn u_p instead.
             double mx = p.c + q.c, my = p.s + q.s;
             const double n = std::sqrt(mx * mx + my * my);
             if (n < 1e-3) {
-                const double mid = 0.5 * (p.angle + q.angle);
-                mx = std::cos(mid);
-                my = std::sin(mid);
+                const double h = 0.5 * span, ch = std::cos(h), sh = std::sin(h);
+                mx = p.c * ch - p.s * sh;
+                my = p.s * ch + p.c * sh;
             } else {
                 const double sign = span > M_PI ? -1.0 : 1.0;
                 mx *= sign / n;
@@ -439,25 +461,28 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
                 += 0.5 * (d.r_um * d.r_um * span + lx * d.r_um * (q.s - p.s)
                           - ly * d.r_um * (q.c - p.c));
         };
-        // Cuts the visible arc [a, b] at the crossings.
-        const auto emit = [&](double a, double b) {
-            ArcPoint lo = point_at(a);
-            auto it     = std::upper_bound(crossings.begin(), crossings.end(), a,
-                                           [](double v, const ArcPoint& u) { return v < u.angle; });
-            for (; it != crossings.end() && it->angle < b; ++it) {
-                deposit(lo, *it);
-                lo = *it;
+        // Cuts the visible arc from a to b at the crossings.
+        const auto emit = [&](const ArcPoint& a, const ArcPoint& b) {
+            ArcPoint lo = a;
+            auto it     = std::upper_bound(crossings.begin(), crossings.end(), a, by_angle);
+            bool any    = false;
+            for (; it != crossings.end() && it->angle < b.angle; ++it) {
+                deposit(lo, *it, false);
+                lo  = *it;
+                any = true;
             }
-            deposit(lo, point_at(b));
+            deposit(lo, b, !any && a.angle == 0.0 && b.angle == 4.0);
         };
-        double cursor = 0.0;
-        for (const auto& [a, b] : arcs) {
-            if (a > cursor)
+        // Visible = gaps between the merged hidden intervals.
+        ArcPoint cursor { 0.0, 1.0, 0.0 };
+        for (const auto& [a, b] : hidden) {
+            if (a.angle > cursor.angle)
                 emit(cursor, a);
-            cursor = std::max(cursor, b);
+            if (b.angle > cursor.angle)
+                cursor = b;
         }
-        if (cursor < 2.0 * M_PI)
-            emit(cursor, 2.0 * M_PI);
+        if (cursor.angle < 4.0)
+            emit(cursor, ArcPoint { 4.0, 1.0, 0.0 });
     }
 
     // 3. Grid lines inside the union: each pixel's right edge (x = x_i+1,
