@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -167,6 +168,48 @@ int print_stock(const std::string& name_or_path, const Console& con)
 // ---------------------------------------------------------------------------
 // Rendering stages.
 
+// Input size limits, checked against the file's header before any pixel
+// is allocated (README "Limits and guarantees"). The input is read as
+// float: at the limits that is 8 GiB.
+constexpr int64_t kMaxInputSide   = int64_t(1) << 20;  ///< pixels a side (1048576)
+constexpr int64_t kMaxInputPixels = int64_t(1) << 28;  ///< pixels (268435456: 16384^2)
+constexpr int64_t kMaxInputValues = int64_t(1) << 31;  ///< pixels x channels
+constexpr int kMaxInputChannels   = 1024;
+
+/// Checks what a file's header declares: a 2D, non-deep image with at least
+/// one pixel, within the limits above. A corrupt header that claims 1e6 x
+/// 1e6 pixels is refused here, before anything is allocated for it.
+Status check_input_spec(const std::string& path, const OIIO::ImageSpec& spec)
+{
+    const int64_t w = spec.width, h = spec.height, d = spec.depth, nc = spec.nchannels;
+    if (w <= 0 || h <= 0 || nc <= 0)
+        return Status::errorf("input '", path, "' declares ", w, "x", h, " pixels of ", nc,
+                              " channels: an image needs at least one pixel and one channel");
+    if (d > 1)
+        return Status::errorf("input '", path, "' is a volume (depth ", d,
+                              "): expected a 2D image");
+    if (spec.deep)
+        return Status::errorf("input '", path, "' is a deep image: not supported");
+    if (w > kMaxInputSide || h > kMaxInputSide || w * h > kMaxInputPixels
+        || nc > kMaxInputChannels || w * h * nc > kMaxInputValues)
+        return Status::errorf("input '", path, "' declares ", w, "x", h, " pixels of ", nc,
+                              " channels: larger than filmgrain reads (at most ", kMaxInputSide,
+                              " pixels a side, ", kMaxInputPixels, " pixels, ",
+                              kMaxInputChannels, " channels and ", kMaxInputValues,
+                              " channel values); refused before reading it (a corrupt header?)");
+    const int nchannels = spec.nchannels;
+    if (nchannels != 1 && nchannels < 3)
+        return Status::errorf("input '", path, "' has ", nchannels,
+                              " channels: expected 1 (grey) or at least 3 (R, G, B first)");
+    return {};
+}
+
+/// Reads subimage 0 of `path` as float. Through ImageInput rather than
+/// ImageBuf::read so that the header is checked before the pixels are
+/// allocated, and so that a short read is an error: ImageBuf::read reports
+/// success on a truncated uncompressed TIFF (libtiff's "Read error at
+/// scanline" reaches only the ImageInput), leaving zeros and garbage where
+/// the missing pixels were.
 Status read_input(const std::string& path, OIIO::ImageBuf& out)
 {
     std::error_code ec;
@@ -178,16 +221,82 @@ Status read_input(const std::string& path, OIIO::ImageBuf& out)
     // (alpha itself is ignored by the simulation).
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
-    OIIO::ImageBuf buf(path, 0, 0, nullptr, &config);
-    if (!buf.read(0, 0, true, OIIO::TypeFloat))
-        return Status::errorf("cannot read input '", path, "': ", trim(buf.geterror()));
-    if (buf.deep())
-        return Status::errorf("input '", path, "' is a deep image: not supported");
-    const int nc = buf.spec().nchannels;
-    if (nc != 1 && nc < 3)
-        return Status::errorf("input '", path, "' has ", nc,
-                              " channels: expected 1 (grey) or at least 3 (R, G, B first)");
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) {
+        const std::string why = trim(OIIO::geterror());
+        return Status::errorf("cannot read input '", path, "': ",
+                              why.empty() ? std::string("not an image OpenImageIO can read")
+                                          : why);
+    }
+    if (Status s = check_input_spec(path, in->spec()); !s)
+        return s;
+    OIIO::ImageSpec spec = in->spec();
+    spec.set_format(OIIO::TypeFloat);  // also clears per-channel formats
+    OIIO::ImageBuf buf(spec);
+    float* pixels = static_cast<float*>(buf.localpixels());
+    if (!pixels)
+        return Status::errorf("cannot read input '", path, "': cannot allocate ", spec.width,
+                              "x", spec.height, "x", spec.nchannels, " floats");
+    const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeFloat, pixels);
+    const std::string why = trim(in->geterror());
+    in->close();
+    if (!ok || !why.empty())
+        return Status::errorf("cannot read input '", path, "': ",
+                              why.empty() ? std::string("read failed (truncated or corrupt?)")
+                                          : why);
     out = std::move(buf);
+    return {};
+}
+
+/// Output limits (README "Limits and guarantees"): the rendered region
+/// (the ROI, else the whole scan) is allocated as floats, one per layer.
+constexpr int64_t kMaxOutputPixels = int64_t(1) << 28;
+constexpr int64_t kMaxOutputValues = int64_t(1) << 31;
+
+/// Refuses, before any work, an output region larger than the limits.
+Status check_output_size(const FilmgrainOptions& opts, const OIIO::ImageSpec& input,
+                         const FilmgrainCommand& cmd)
+{
+    RenderSettings settings;
+    settings.scan_width  = opts.scan_width;
+    settings.scan_height = opts.scan_height;
+    ScanGeometry scan;
+    if (Status s = scan_geometry(opts.scene, input.width, input.height, settings, scan); !s)
+        return s;
+    const int64_t w = cmd.has_roi ? cmd.roi_width : scan.width;
+    const int64_t h = cmd.has_roi ? cmd.roi_height : scan.height;
+    const int64_t layers = static_cast<int64_t>(opts.stock.layers.size());
+    if (w > kMaxOutputPixels || h > kMaxOutputPixels || w * h > kMaxOutputPixels
+        || w * h * layers > kMaxOutputValues)
+        return Status::errorf("scan = ", scan.width, "x", scan.height, cmd.has_roi ? " (roi " : "",
+                              cmd.has_roi ? std::to_string(w) + "x" + std::to_string(h) + ")" : "",
+                              ": an output of ", w, "x", h, " pixels of ", layers,
+                              " layers is larger than filmgrain writes (at most ",
+                              kMaxOutputPixels, " pixels and ", kMaxOutputValues,
+                              " values); render a part of it with roi=X,Y,W,H");
+    return {};
+}
+
+/// The files the render reads besides INPUT (a stock JSON, an OCIO config)
+/// must not be any of its outputs: --stats can have any name.
+Status check_outputs_spare_inputs(const CliArgs& a)
+{
+    const char* ocio_env = std::getenv("OCIO");
+    const std::pair<const char*, std::string> inputs[] = {
+        { "the stock file", preset_json(a.filmgrain.stock).empty() ? a.filmgrain.stock : "" },
+        { "the --colorconfig file", a.colorconfig },
+        { "the $OCIO config", a.colorconfig.empty() && ocio_env ? ocio_env : "" },
+    };
+    const std::pair<const char*, const std::string*> outputs[] = {
+        { "-o", &a.output }, { "--stats", &a.stats_path }, { "--preview", &a.preview_path }
+    };
+    for (const auto& [what_in, in] : inputs)
+        for (const auto& [what_out, out] : outputs) {
+            std::error_code ec;
+            if (!in.empty() && !out->empty() && fs::equivalent(in, *out, ec) && !ec)
+                return Status::errorf(what_out, " and ", what_in, " name the same file '",
+                                      *out, "': refusing to overwrite it");
+        }
     return {};
 }
 
@@ -305,6 +414,8 @@ int render(const CliArgs& a, const Console& con)
     FilmgrainOptions opts;
     if (Status s = load_stock(cmd.stock, opts.stock); !s)
         return con.fail(s);
+    if (Status s = check_outputs_spare_inputs(a); !s)
+        return con.fail(s);
     opts.scene        = cmd.scene;
     if (a.wedge && !cmd.has_width_mm)
         opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
@@ -361,6 +472,8 @@ int render(const CliArgs& a, const Console& con)
             return con.fail(s);
         report.input_file = a.input;
     }
+    if (Status s = check_output_size(opts, src.spec(), cmd); !s)
+        return con.fail(s);
     report.seconds.read = seconds_since(t);
     if (interrupted())
         return con.fail_interrupted();
