@@ -23,15 +23,36 @@ constexpr uint64_t kTablePhotonCap = uint64_t(1) << 12;
 /// (about one in 740) that also catch more photons than the table holds run
 /// the chain instead (early_stop, exact).
 constexpr double kTableAreaQuantileZ = 3.0;
+/// Exposure value a table covers (diffuse white, ~2.5 stops over grey):
+/// a property of the scene, not of the pixels, so that a ROI render uses
+/// the same table, and draws the same grains, as the full frame.
+constexpr double kTableTopValue = 1.0;
 
-/// Largest exposure value v of a layer over an input region.
-double max_value(const LayerExposure& ex, const InputRegion& r)
+/// Largest mean absorbed photon count of a mean-sized grain that a render
+/// accepts (MODEL.md 2): about 2^33 times the count at the stock's grey
+/// point for the built-in stocks. Beyond it a render is refused: the exact
+/// chain costs one event per photon (~50 ns), and such values are most
+/// likely a broken pixel or a wrong exposure.
+constexpr double kMaxMeanPhotonsPerGrain = 1e10;
+
+/// The largest exposure value v of a layer over an input region, and where.
+struct RegionValues {
+    double max = 0.0;
+    int64_t max_x = 0, max_y = 0;
+};
+RegionValues region_values(const LayerExposure& ex, const InputRegion& r)
 {
-    double v = 0.0;
+    RegionValues out;
     for (int64_t y = r.y0; y < r.y1; ++y)
-        for (int64_t x = r.x0; x < r.x1; ++x)
-            v = std::max(v, ex.value(x, y));
-    return v;
+        for (int64_t x = r.x0; x < r.x1; ++x) {
+            const double v = ex.value(x, y);
+            if (v > out.max) {
+                out.max   = v;
+                out.max_x = x;
+                out.max_y = y;
+            }
+        }
+    return out;
 }
 
 /// Poisson pmf over [n0, n1] by recurrence from the mode (no lgamma per
@@ -137,6 +158,8 @@ std::shared_ptr<const DevelopTable> cached_table(const KineticsRates& rates, dou
     }
     auto table = std::make_shared<const DevelopTable>(rates, shutter_s, Development(stock),
                                                       options);
+    if (!table->complete())
+        return table;  // over its budget: unfinished, never cached
     std::lock_guard<std::mutex> lock(mutex);
     constexpr size_t kEntries = 16;
     if (cache.size() >= kEntries)
@@ -189,6 +212,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         DevelopTable::Options options;
         std::shared_ptr<const DevelopTable> table;
         double seconds = 0.0;
+        /// Chain events the grains it serves would cost without it.
+        double grain_events = 0.0;
     };
     std::vector<TableRequest> requests;
     struct Need {
@@ -198,6 +223,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     };
     std::vector<Need> needs;
     std::vector<double> v_max(stock.layers.size(), 0.0);
+    std::vector<double> grain_events(stock.layers.size(), 0.0);
 
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const Layer& layer = stock.layers[l];
@@ -243,13 +269,30 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             plan.coverage_samples = settings.coverage_samples;
 
         // Kinetics (MODEL.md 3-4), per population.
-        if (!exact)
-            v_max[l] = max_value(plan.exposure, input_region(input, frame, roi, margin_um));
+        const RegionValues values
+            = region_values(plan.exposure, input_region(input, frame, roi, margin_um));
+        v_max[l] = values.max;
         std::ostringstream why;
         for (size_t p = 0; p < plan.populations.size(); ++p) {
             PopulationPlan& pp    = plan.populations[p];
             const Population& pop = layer.populations[p];
             pp.exposure           = exposure;
+            const double mean_grain_photons
+                = pp.photons_per_value_um2 * pp.grains.mean_area_um2();
+            if (mean_grain_photons * values.max > kMaxMeanPhotonsPerGrain)
+                return Status::errorf(
+                    "input pixel (", values.max_x, ", ", values.max_y, ") gives layer '",
+                    layer.name, "' an exposure of ", format_g(values.max * lxs_per_value),
+                    " lxs: ", format_g(mean_grain_photons * values.max),
+                    " absorbed photons per mean grain (population ", p, "), above the limit of ",
+                    format_g(kMaxMeanPhotonsPerGrain),
+                    " (README, Limits and guarantees): lower exposure= or clamp the input");
+            // What the chains of the frame's grains would cost without a
+            // table at grey: about one event per absorbed photon. (The whole
+            // frame, and grey rather than the pixels: a ROI render must
+            // decide as the full frame does.)
+            const double events = pop.grains_per_um2 * frame.width_um * frame.height_um
+                                  * mean_grain_photons * kGreyValue;
             if (exact) {
                 pp.kinetics = KineticsMethod::chain;
                 continue;
@@ -268,12 +311,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pp.kinetics = want;
             if (want != KineticsMethod::table)
                 continue;
-            // The largest photon count the region gives a grain short of the
-            // largest ones, plus 6 Poisson sigmas.
+            // The photon count of a grain short of the largest ones at the
+            // table's top value, plus 6 Poisson sigmas; brighter grains run
+            // the early-stopped chain (quickly decided: they develop).
             const double s      = pop.diameter_log_sigma;
             const double d_q    = std::exp(std::log(pop.diameter_um) - 0.5 * s * s
                                            + s * kTableAreaQuantileZ);
-            const double lam    = pp.photons_per_value_um2 * v_max[l] * M_PI / 4.0 * d_q * d_q;
+            const double lam
+                = pp.photons_per_value_um2 * kTableTopValue * M_PI / 4.0 * d_q * d_q;
             const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
             // Budget: a node error e moves a patch density by at most
             // 0.434 n E[a] e; nodes' errors partly average (estimated below).
@@ -297,11 +342,13 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 req.options.target_standard_error = target;
                 req.options.stream_key            = hash_ids(scene.seed, 0x7ab1e, r);
                 req.options.nthreads              = settings.nthreads;
+                req.grain_events                  = events;
                 requests.push_back(req);
             } else {
                 auto& o       = requests[r].options;
                 o.max_photons = std::max(o.max_photons, n_max);
                 o.target_standard_error = std::min(o.target_standard_error, target);
+                requests[r].grain_events += events;
             }
             needs.push_back({ l, p, r, pp.photons_per_value_um2 * v_max[l],
                               n_need > kTablePhotonCap });
@@ -310,24 +357,43 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         out.push_back(std::move(plan));
     }
 
+    // A table is built only when it costs fewer chain events than the
+    // frame's grains would cost without it (few grains, large ones):
+    // otherwise the chain runs, stopped once each grain's fate is decided.
+    // The decision depends on the table's full cost only, never on which
+    // tables earlier renders left in the cache, nor on the ROI.
     for (TableRequest& req : requests) {
         const auto t0 = std::chrono::steady_clock::now();
-        req.table     = cached_table(req.rates, scene.shutter_s, stock, req.options);
-        req.seconds   = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        // kinetics=table asked for explicitly: built whatever it costs.
+        req.options.event_budget
+            = settings.kinetics ? 0 : static_cast<uint64_t>(std::clamp(req.grain_events, 1.0, 1e18));
+        req.table   = cached_table(req.rates, scene.shutter_s, stock, req.options);
+        req.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     std::vector<bool> charged(requests.size(), false);
     for (const Need& need : needs) {
         LayerPlan& plan        = out[need.layer];
         PopulationPlan& pp     = plan.populations[need.population];
         const TableRequest& rq = requests[need.request];
-        pp.table               = rq.table;
-        plan.error_estimate += table_density_error(
-            stock.layers[need.layer].populations[need.population], *pp.table,
-            need.photons_per_um2_max);
         if (!charged[need.request]) {  // a shared table's time is charged once
             plan.setup_seconds += rq.seconds;
             charged[need.request] = true;
         }
+        if (!rq.table->complete()
+            || (rq.options.event_budget && rq.table->total_events() > rq.options.event_budget)) {
+            pp.kinetics = KineticsMethod::early_stop;
+            std::ostringstream why;
+            why << "population " << need.population
+                << ": a table of P(develop|N) would cost more chain events than the ~"
+                << format_g(rq.grain_events)
+                << " its grains need: the chain runs until each outcome is decided; ";
+            plan.reason += why.str();
+            continue;
+        }
+        pp.table = rq.table;
+        plan.error_estimate += table_density_error(
+            stock.layers[need.layer].populations[need.population], *pp.table,
+            need.photons_per_um2_max);
         std::ostringstream why;
         why << "population " << need.population << ": P(develop|N) tabulated for N <= "
             << pp.table->max_photons() << " (table " << need.request << ": "

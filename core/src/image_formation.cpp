@@ -355,9 +355,17 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
         r_ref += d.r_um;
     r_ref = discs.empty() ? 1.0 : std::max(r_ref / static_cast<double>(discs.size()), 1e-9);
     const double r_small = 3.0 * r_ref;  // larger discs are "big"
-    const double cell    = 2.0 * r_ref;
     const double gx0 = static_cast<double>(x0) * px_um - r_small;
     const double gy0 = static_cast<double>(y0) * py_um - r_small;
+    // Cells are at least two typical radii wide, and no more numerous than
+    // about four per disc: a block of pixels far larger than its grains
+    // (a thumbnail of fine grain) then costs what its discs cost, not
+    // (block / radius)^2 empty cells. Any cell size gives the same result:
+    // it only decides which non-overlapping discs are also tested.
+    const double span_x = static_cast<double>(x1 - x0) * px_um + 2.0 * r_small;
+    const double span_y = static_cast<double>(y1 - y0) * py_um + 2.0 * r_small;
+    const double cell   = std::max(
+        2.0 * r_ref, std::sqrt(span_x * span_y / (4.0 * static_cast<double>(discs.size()) + 16.0)));
     const int64_t gw = static_cast<int64_t>(std::ceil((static_cast<double>(x1) * px_um + r_small - gx0) / cell)) + 1;
     const int64_t gh = static_cast<int64_t>(std::ceil((static_cast<double>(y1) * py_um + r_small - gy0) / cell)) + 1;
     const auto gcol = [&](double x) {

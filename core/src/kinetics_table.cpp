@@ -22,8 +22,22 @@ struct NodeResult {
 /// survival is below the target. Each run contributes its survival
 /// probability (1 - f)(1 - d)^n4: a conditional expectation, with less
 /// variance than counting developed grains.
+/// Events spent by a build so far, against its budget (Options).
+struct Budget {
+    uint64_t limit = 0;  ///< 0: none
+    std::atomic<uint64_t> spent { 0 };
+    std::atomic<bool> exceeded { false };
+    /// Adds a batch's events; false once the budget is exceeded.
+    bool charge(uint64_t events)
+    {
+        if (limit && (spent += events) > limit)
+            exceeded = true;
+        return !exceeded;
+    }
+};
+
 NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_s,
-                         const Development& dev, const DevelopTable::Options& o)
+                         const Development& dev, const DevelopTable::Options& o, Budget& budget)
 {
     NodeResult r;
     if (n < 4) {
@@ -37,6 +51,9 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
     const int batch = std::max(32, static_cast<int>(std::min<uint64_t>(
                                        o.min_samples, o.min_samples * uint64_t(256) / n)));
     for (int done = 0; done < o.max_samples;) {
+        if (budget.exceeded)
+            return r;
+        const uint64_t events_before = r.events;
         for (int i = 0; i < batch && done < o.max_samples; ++i, ++done) {
             Rng rng(hash_ids(o.stream_key, 0x7ab1e, n, static_cast<uint64_t>(done)),
                     Stage::kinetics);
@@ -47,6 +64,8 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
             sum2 += s * s;
             r.events += events;
         }
+        if (!budget.charge(r.events - events_before))
+            return r;
         r.runs          = static_cast<uint64_t>(done);
         const double m  = sum / done;
         const double v  = std::max(0.0, sum2 / done - m * m);
@@ -80,10 +99,12 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
     // (they cost most), each into its own slot.
     std::vector<NodeResult> results(m_nodes_n.size());
     std::atomic<size_t> next_node { 0 };
+    Budget budget;
+    budget.limit    = options.event_budget;
     const auto work = [&]() {
-        for (size_t k; (k = next_node++) < m_nodes_n.size();) {
+        for (size_t k; !budget.exceeded && (k = next_node++) < m_nodes_n.size();) {
             const size_t i = m_nodes_n.size() - 1 - k;
-            results[i]     = estimate_node(m_nodes_n[i], rates, shutter_s, dev, m_options);
+            results[i] = estimate_node(m_nodes_n[i], rates, shutter_s, dev, m_options, budget);
         }
     };
     int nthreads = options.nthreads > 0 ? options.nthreads
@@ -95,6 +116,11 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
     work();
     for (auto& t : threads)
         t.join();
+    if (budget.exceeded) {
+        m_complete     = false;
+        m_total_events = budget.spent;
+        return;
+    }
 
     for (const NodeResult& r : results) {
         m_nodes_p.push_back(r.p);

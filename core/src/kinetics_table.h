@@ -39,6 +39,11 @@ public:
         uint64_t stream_key = 0;
         /// Worker threads for the build (0: all).
         int nthreads = 0;
+        /// Chain events the build may spend (0: no limit). A build that
+        /// would spend more stops early and is incomplete(): deterministic,
+        /// since it stops exactly when its full cost, total_events() of a
+        /// complete build, exceeds the budget, whatever the threads.
+        uint64_t event_budget = 0;
     };
 
     /// Builds the table. Deterministic for any thread count: each node's
@@ -74,6 +79,9 @@ public:
     size_t node_count() const { return m_nodes_n.size(); }
     uint64_t total_runs() const { return m_total_runs; }
     uint64_t total_events() const { return m_total_events; }
+    /// False when the build ran out of its event budget: then the table
+    /// must not be used (its nodes are unfinished).
+    bool complete() const { return m_complete; }
 
 private:
     double interpolate(uint64_t n) const;
@@ -84,6 +92,7 @@ private:
     std::vector<double> m_nodes_se;
     double m_max_p = 0.0, m_min_p = 1.0, m_max_se = 0.0, m_max_interp = 0.0;
     uint64_t m_total_runs = 0, m_total_events = 0;
+    bool m_complete = true;
 };
 
 }  // namespace filmgrain

@@ -104,6 +104,18 @@ uint64_t poisson_inversion(double mean, Rng& rng)
     return k;
 }
 
+/// Means at or above this saturate (2^63: every count a uint64_t holds is
+/// then far below the mean's own rounding error of sd sqrt(mean) ~ 3e9).
+constexpr double kPoissonSaturation = 9223372036854775808.0;
+
+/// A non-negative integral double as a count, saturating at UINT64_MAX
+/// (a plain cast of a value >= 2^64 is undefined behaviour).
+uint64_t to_count(double kf)
+{
+    return kf < 18446744073709551616.0 ? static_cast<uint64_t>(kf)
+                                       : std::numeric_limits<uint64_t>::max();
+}
+
 uint64_t poisson_ptrs(double mean, Rng& rng)
 {
     const double smu       = std::sqrt(mean);
@@ -118,12 +130,12 @@ uint64_t poisson_ptrs(double mean, Rng& rng)
         const double us = 0.5 - std::fabs(u);
         const double kf = std::floor((2.0 * a / us + b) * u + mean + 0.43);
         if (us >= 0.07 && v <= vr)
-            return static_cast<uint64_t>(kf);
+            return to_count(kf);
         if (kf < 0.0 || (us < 0.013 && v > us))
             continue;
         if (std::log(v) + std::log(inv_alpha) - std::log(a / (us * us) + b)
             <= -mean + kf * log_mean - std::lgamma(kf + 1.0))
-            return static_cast<uint64_t>(kf);
+            return to_count(kf);
     }
 }
 
@@ -133,6 +145,8 @@ uint64_t sample_poisson(double mean, Rng& rng)
 {
     if (!(mean > 0.0))
         return 0;
+    if (mean >= kPoissonSaturation)
+        return std::numeric_limits<uint64_t>::max();
     return mean < 10.0 ? poisson_inversion(mean, rng) : poisson_ptrs(mean, rng);
 }
 

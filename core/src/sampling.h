@@ -41,7 +41,10 @@ double sample_truncated_normal(double z_lo, double z_hi, double u);
 /// Exactly Poisson(mean) distributed count. Inversion for mean < 10,
 /// Hormann's PTRS transformed rejection ("The transformed rejection method
 /// for generating Poisson random variables", 1993) above. mean <= 0 or NaN
-/// gives 0. Valid for means up to about 1e15 (64-bit counts).
+/// gives 0. Exact up to means of about 1e15; above, still Poisson to far
+/// within its standard deviation (double rounding of the count); means of
+/// 2^63 or more, +inf included, saturate at UINT64_MAX. Never decreasing in
+/// the mean's range for a fixed stream, never 0 for a huge mean.
 uint64_t sample_poisson(double mean, Rng& rng);
 
 }  // namespace filmgrain

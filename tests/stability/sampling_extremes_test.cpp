@@ -31,20 +31,20 @@ TEST(StabilitySampling, PoissonAcrossTheValidRange)
     }
 }
 
-// A core bug: beyond the documented 1e15 the sampler's final
-// static_cast<uint64_t>(kf) (core/src/sampling.cpp, poisson_ptrs) is
-// undefined behaviour once kf >= 2^64 (x86 returns 0 for kf >= ~2.8e19 and
-// values near 2^63 below that), and an infinite mean (a float-max pixel at
-// +64 stops) gives kf = NaN. The render passes such means through from
-// bright pixels (render_extremes_test: DISABLED_HugeExposureFinishesOrIsRefused).
-// Expected: a count that never falls as the mean rises: at least 1e15 (or
-// saturation at UINT64_MAX), never 0. Enable when fixed.
-TEST(StabilitySampling, DISABLED_PoissonBeyondTheValidRangeSaturates)
+// Beyond the exact range the count must never fall as the mean rises and
+// never be 0 for a huge mean: +inf (a float-max pixel at +64 stops) and
+// means of 2^63 or more saturate at UINT64_MAX. (First failure: the final
+// static_cast<uint64_t>(kf) was undefined behaviour for kf >= 2^64; x86
+// gave 0 above ~2.8e19, and +inf gave NaN.)
+TEST(StabilitySampling, PoissonBeyondTheValidRangeSaturates)
 {
     for (double mean : { 1e19, 1e20, 1e25, 1e32, 1e300, HUGE_VAL }) {
         Rng rng(hash_ids(0xb16, 1), Stage::photons);
         const uint64_t n = sample_poisson(mean, rng);
         EXPECT_GE(n, uint64_t(1000000000000000)) << "mean " << mean << " gave " << n;
+        if (mean >= 9223372036854775808.0) {
+            EXPECT_EQ(n, std::numeric_limits<uint64_t>::max()) << "mean " << mean;
+        }
     }
 }
 
