@@ -52,6 +52,15 @@ def run(fg_bin):
     return _run
 
 
+@pytest.fixture
+def dirs(tmp_path):
+    """An empty input and an empty output directory: (in, out)."""
+    indir, outdir = tmp_path / "in", tmp_path / "out"
+    indir.mkdir()
+    outdir.mkdir()
+    return indir, outdir
+
+
 def write_image(path, pixels, fmt="float", attrs=None):
     """Writes a (height, width, channels) array with OpenImageIO."""
     pixels = np.asarray(pixels)

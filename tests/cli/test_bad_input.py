@@ -95,14 +95,6 @@ def expect_refused(fg_bin, indir, outdir, args, words, max_rss_mb=None):
     return r
 
 
-@pytest.fixture
-def dirs(tmp_path):
-    indir, outdir = tmp_path / "in", tmp_path / "out"
-    indir.mkdir()
-    outdir.mkdir()
-    return indir, outdir
-
-
 def grey(value=0.18, width=16, height=12):
     return np.full((height, width, 3), value, np.float32)
 

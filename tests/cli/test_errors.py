@@ -95,14 +95,6 @@ def write_text(path, text):
     return path
 
 
-@pytest.fixture
-def dirs(tmp_path):
-    indir, outdir = tmp_path / "in", tmp_path / "out"
-    indir.mkdir()
-    outdir.mkdir()
-    return indir, outdir
-
-
 @pytest.mark.parametrize("name,setup,mods,words", CASES, ids=[c[0] for c in CASES])
 def test_bad_input(run, dirs, name, setup, mods, words):
     indir, outdir = dirs
