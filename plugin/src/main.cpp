@@ -12,6 +12,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cerrno>
 #include <csignal>
@@ -25,6 +26,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_args.h"
 #include "filmgrain/imagebufalgo_filmgrain.h"
@@ -204,13 +206,104 @@ Status check_input_spec(const std::string& path, const OIIO::ImageSpec& spec)
     return {};
 }
 
-/// Reads subimage 0 of `path` as float. Through ImageInput rather than
-/// ImageBuf::read so that the header is checked before the pixels are
-/// allocated, and so that a short read is an error: ImageBuf::read reports
-/// success on a truncated uncompressed TIFF (libtiff's "Read error at
-/// scanline" reaches only the ImageInput), leaving zeros and garbage where
-/// the missing pixels were.
-Status read_input(const std::string& path, OIIO::ImageBuf& out)
+/// With roi=, the rectangle of the input's data window (file coordinates)
+/// that the render reads: required_input_window's window (the ROI's film
+/// region grown by the largest grain radius), clipped to the data window.
+/// False when the whole image is to be read: no roi, or a roi the operator
+/// will refuse (it then reports the error, as for any input).
+bool roi_read_window(const FilmgrainOptions& opts, const FilmgrainCommand& cmd,
+                     const OIIO::ImageSpec& spec, OIIO::ROI& window)
+{
+    if (!cmd.has_roi)
+        return false;
+    // The frame is the display window, else the data window (as the
+    // operator's source_frame).
+    const bool full_w = spec.full_width > 0, full_h = spec.full_height > 0;
+    const int64_t fx = full_w ? spec.full_x : spec.x, fy = full_h ? spec.full_y : spec.y;
+    const int64_t fw = full_w ? spec.full_width : spec.width;
+    const int64_t fh = full_h ? spec.full_height : spec.height;
+    RenderSettings settings;
+    settings.scan_width  = opts.scan_width;
+    settings.scan_height = opts.scan_height;
+    settings.roi         = Roi { cmd.roi_x, cmd.roi_y, cmd.roi_x + cmd.roi_width,
+                                 cmd.roi_y + cmd.roi_height };
+    ScanGeometry scan;
+    if (!scan_geometry(opts.scene, fw, fh, settings, scan))
+        return false;
+    const Roi& r = settings.roi;
+    if (r.x_begin < 0 || r.y_begin < 0 || r.x_end > scan.width || r.y_end > scan.height
+        || r.x_end <= r.x_begin || r.y_end <= r.y_begin)
+        return false;
+    Roi w;
+    if (!required_input_window(opts.stock, opts.scene, fw, fh, settings, w) || w.empty())
+        return false;
+    const int64_t x0 = std::max<int64_t>(w.x_begin + fx, spec.x);
+    const int64_t y0 = std::max<int64_t>(w.y_begin + fy, spec.y);
+    const int64_t x1 = std::min<int64_t>(w.x_end + fx, int64_t(spec.x) + spec.width);
+    const int64_t y1 = std::min<int64_t>(w.y_end + fy, int64_t(spec.y) + spec.height);
+    if (x0 >= x1 || y0 >= y1)
+        return false;
+    window = OIIO::ROI(static_cast<int>(x0), static_cast<int>(x1), static_cast<int>(y0),
+                       static_cast<int>(y1), 0, 1, 0, spec.nchannels);
+    return true;
+}
+
+/// Reads `window` (file coordinates, inside the data window, all channels)
+/// of subimage 0 as float into `dst`, rows of window.width() pixels:
+/// scanline files in strips of whole scanlines, tiled files as the tiles
+/// that cover the window; only the window is kept.
+bool read_window(OIIO::ImageInput& in, const OIIO::ROI& window, float* dst)
+{
+    const OIIO::ImageSpec& spec = in.spec();
+    const int nc                = spec.nchannels;
+    const size_t row_values     = static_cast<size_t>(window.width()) * nc;
+    std::vector<float> buf;
+    if (spec.tile_width > 0) {
+        const int tw = spec.tile_width, th = spec.tile_height > 0 ? spec.tile_height : 1;
+        const int xb = spec.x + (window.xbegin - spec.x) / tw * tw;
+        const int yb = spec.y + (window.ybegin - spec.y) / th * th;
+        const int xe = std::min(spec.x + spec.width,
+                                spec.x + (window.xend - spec.x + tw - 1) / tw * tw);
+        const int ye = std::min(spec.y + spec.height,
+                                spec.y + (window.yend - spec.y + th - 1) / th * th);
+        const size_t w = static_cast<size_t>(xe - xb);
+        buf.resize(w * static_cast<size_t>(ye - yb) * nc);
+        if (!in.read_tiles(0, 0, xb, xe, yb, ye, 0, 1, 0, nc, OIIO::TypeFloat, buf.data()))
+            return false;
+        for (int y = window.ybegin; y < window.yend; ++y)
+            std::copy_n(buf.data() + (static_cast<size_t>(y - yb) * w + (window.xbegin - xb)) * nc,
+                        row_values, dst + static_cast<size_t>(y - window.ybegin) * row_values);
+        return true;
+    }
+    // Strips of at most ~64 MiB of whole scanlines.
+    const size_t line_values = static_cast<size_t>(spec.width) * nc;
+    const int strip = static_cast<int>(std::clamp<size_t>(
+        (size_t(64) << 20) / (line_values * sizeof(float)), 1, 1024));
+    buf.resize(line_values * static_cast<size_t>(std::min(strip, window.height())));
+    for (int y0 = window.ybegin; y0 < window.yend; y0 += strip) {
+        const int y1 = std::min(window.yend, y0 + strip);
+        if (!in.read_scanlines(0, 0, y0, y1, 0, 0, nc, OIIO::TypeFloat, buf.data()))
+            return false;
+        for (int y = y0; y < y1; ++y)
+            std::copy_n(buf.data() + static_cast<size_t>(y - y0) * line_values
+                            + static_cast<size_t>(window.xbegin - spec.x) * nc,
+                        row_values, dst + static_cast<size_t>(y - window.ybegin) * row_values);
+    }
+    return true;
+}
+
+/// Reads subimage 0 of `path` as float: the whole data window, or with
+/// roi= only the part the render reads (roi_read_window), so that a
+/// 256x256 ROI of a 16K frame reads, converts and holds a few hundred
+/// pixels a side. The buffer keeps the file's display window, so the
+/// operator places it on the frame. `header` is the file's own spec.
+/// Through ImageInput rather than ImageBuf::read so that the header is
+/// checked before the pixels are allocated, and so that a short read is an
+/// error: ImageBuf::read reports success on a truncated uncompressed TIFF
+/// (libtiff's "Read error at scanline" reaches only the ImageInput),
+/// leaving zeros and garbage where the missing pixels were.
+Status read_input(const std::string& path, const FilmgrainOptions& opts,
+                  const FilmgrainCommand& cmd, OIIO::ImageBuf& out, OIIO::ImageSpec& header)
 {
     std::error_code ec;
     if (!fs::exists(path, ec))
@@ -230,14 +323,36 @@ Status read_input(const std::string& path, OIIO::ImageBuf& out)
     }
     if (Status s = check_input_spec(path, in->spec()); !s)
         return s;
+    header               = in->spec();
     OIIO::ImageSpec spec = in->spec();
     spec.set_format(OIIO::TypeFloat);  // also clears per-channel formats
+    OIIO::ROI window;
+    const bool part = roi_read_window(opts, cmd, spec, window)
+                      && window != OIIO::ROI(spec.x, spec.x + spec.width, spec.y,
+                                             spec.y + spec.height, 0, 1, 0, spec.nchannels);
+    if (part) {
+        // The frame stays the whole image's (the operator reads the full
+        // window as the frame, else the data window).
+        if (spec.full_width <= 0) {
+            spec.full_x     = spec.x;
+            spec.full_width = spec.width;
+        }
+        if (spec.full_height <= 0) {
+            spec.full_y      = spec.y;
+            spec.full_height = spec.height;
+        }
+        spec.x      = window.xbegin;
+        spec.y      = window.ybegin;
+        spec.width  = window.width();
+        spec.height = window.height();
+    }
     OIIO::ImageBuf buf(spec);
     float* pixels = static_cast<float*>(buf.localpixels());
     if (!pixels)
         return Status::errorf("cannot read input '", path, "': cannot allocate ", spec.width,
                               "x", spec.height, "x", spec.nchannels, " floats");
-    const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeFloat, pixels);
+    const bool ok = part ? read_window(*in, window, pixels)
+                         : in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeFloat, pixels);
     const std::string why = trim(in->geterror());
     in->close();
     if (!ok || !why.empty())
@@ -461,18 +576,20 @@ int render(const CliArgs& a, const Console& con)
     // Read.
     auto t = Clock::now();
     OIIO::ImageBuf src;
+    OIIO::ImageSpec header;  // the input's own spec (src may hold only a window of it)
     if (a.wedge) {
         src                     = make_wedge();
+        header                  = src.spec();
         report.input_file       = "wedge";
         report.input_colorspace = "scene_linear";
         con.info("input: the built-in step wedge, " + std::to_string(src.spec().width) + "x"
                  + std::to_string(src.spec().height) + " scene-linear grey");
     } else {
-        if (Status s = read_input(a.input, src); !s)
+        if (Status s = read_input(a.input, opts, cmd, src, header); !s)
             return con.fail(s);
         report.input_file = a.input;
     }
-    if (Status s = check_output_size(opts, src.spec(), cmd); !s)
+    if (Status s = check_output_size(opts, header, cmd); !s)
         return con.fail(s);
     report.seconds.read = seconds_since(t);
     if (interrupted())
@@ -506,8 +623,8 @@ int render(const CliArgs& a, const Console& con)
     RenderSettings geometry_settings;
     geometry_settings.scan_width  = opts.scan_width;
     geometry_settings.scan_height = opts.scan_height;
-    if (Status s = scan_geometry(opts.scene, src.spec().width, src.spec().height,
-                                 geometry_settings, report.scan);
+    if (Status s = scan_geometry(opts.scene, header.width, header.height, geometry_settings,
+                                 report.scan);
         !s)
         return con.fail(s);
     const OIIO::ROI data = dst.roi();

@@ -1,0 +1,998 @@
+#!/usr/bin/python3
+"""Error against run time of every filmgrain engine, path and knob.
+
+    /usr/bin/python3 tools/perf/error_report.py --bin build/plugin/filmgrain --out docs/performance
+
+renders fixed scenes with every configuration below, measures each run's
+time, and compares its output with the exact engine's render of the same
+scene and seed. Writes into --out:
+
+    error_report.md     the tables (README-style; docs/performance/README.md
+                        quotes them)
+    error_report.csv    one row per (scene, configuration): time and errors
+    error_steps.csv     one row per (scene, configuration, layer, wedge step)
+    error_report.json   everything above plus the run log and the verdicts
+    error_vs_time.png   error against CPU time, log axes, the default marked
+
+--small is the CI version (tests/perf): two wedges, one seed, the engine
+configurations only (exact, auto, auto with its table forced, fast), about
+20 s; `tests/perf/check_error_report.py` asserts on its output.
+
+Scenes
+  wedge-paper  the built-in 21-step wedge (--wedge, 1008x96 px on 6.3 mm:
+               6.25 um pixels), stock=paper; the engines (exact, auto,
+               auto with its table forced, fast) with seeds 1-12 (the
+               precision the acceptance of auto needs),
+               the other knobs with seeds 1-3
+  wedge-color  the same wedge, the default color-negative stock (3 layers:
+               3 independent replicates); engines seeds 1-4, knobs seed 1
+  natural      grace_hopper.jpg (matplotlib's sample data), --iscolorspace
+               sRGB, width_mm=4 (7.8 um pixels), the central 256x256 pixels
+               (roi), seed 1
+
+Metrics (definitions; the report repeats them)
+  patch        the interior of a wedge step: the step minus a margin of two
+               "large grain" radii (radius at z = 3 of the largest
+               population) on every side, in which exposure and coverage are
+               not mixed with the neighbouring steps.
+  bias (mean)  mean over the patch of the per-pixel density, path - exact.
+  bias (macro) macro density -log10(mean T) + base, T = 10^-(D - base) per
+               pixel, path - exact.
+  CI           95% confidence interval from batch means: the patch is cut
+               into square blocks of four large-grain radii; each block gives
+               one paired difference (path block mean - exact block mean,
+               same seed, so shared grains cancel); blocks of every seed are
+               pooled; CI = mean +- t(0.975, nb-1) sd / sqrt(nb). The macro
+               bias uses the delta method on block mean transmittances.
+  granularity  RMS granularity sigma_D: the std of D_A = -log10(T_A) + base,
+               T_A the mean transmittance through a 48 um circular aperture
+               (pixel-area weighted disc) at every aperture position inside
+               the patch (valid positions only); ratio = sigma_path /
+               sigma_exact. CI from batch means over horizontal bands of the
+               patch (2 aperture diameters tall, independent apart from
+               grains straddling a band edge) and seeds: the log ratio per
+               band, mean +- t sd / sqrt(nbands). Steps where an aperture
+               reads the density clamp (max_density) are left out.
+  pixel T      per-pixel transmittance error |T_path - T_exact|, RMS and max
+               over all pixels, for the runs whose grain fates are
+               bit-identical to exact (the --stats path of every population
+               says kinetics=chain or early, exposure=disc: only the
+               coverage differs, and exact's coverage is the converged
+               render of the same grains). Other runs change grain fates:
+               no per-pixel comparison, distributional metrics only.
+  developed    two-proportion z test of developed / grains (--stats) per
+               layer, pooled over seeds, path vs exact with the same seeds;
+               two-sided p-value.
+               The two renders share their grains (same seed), which makes
+               their developed counts positively correlated: the unpaired z
+               test is then conservative (it over-states the variance of
+               the difference), never anti-conservative.
+  time         CPU seconds (user + system of the CLI process, all threads)
+               and wall seconds, median over seeds; whole CLI runs (read,
+               tables, render, EXR write). Ratios are to the exact engine in
+               the same report run.
+"""
+
+import argparse
+import csv
+import hashlib
+import json
+import math
+import os
+import re
+import shutil
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import fgperf  # noqa: E402
+
+GRACE_HOPPER = "/usr/share/matplotlib/mpl-data/sample_data/grace_hopper.jpg"
+APERTURE_UM = 48.0            # granularity aperture (datasheet); --small: 24 um on colour
+TOLERANCE_DENSITY = 0.003     # auto at the default tolerance: |patch-mean bias| <= this
+TOLERANCE_GRANULARITY = 0.03  # and |sigma ratio - 1| <= this
+
+
+# --------------------------------------------------------------------------
+# What is run
+
+class Config:
+    def __init__(self, name, modifiers, family, default=False, accept=False):
+        self.name = name
+        self.modifiers = modifiers
+        self.family = family
+        self.default = default
+        self.accept = default or accept  # checked against issue 4's criterion
+
+
+def all_configs():
+    early = "engine=fast:kinetics=early:photons=disc"
+    return [
+        Config("exact", "engine=exact", "engine"),
+        Config("auto", "engine=auto", "engine", default=True),
+        # What auto runs where a table pays (large frames; the wedges are too
+        # small for one since the table costs more chain events than their
+        # grains need): the same tolerance, the table forced.
+        Config("auto, table forced", "engine=auto:kinetics=table", "engine", accept=True),
+        Config("fast", "engine=fast", "engine"),
+        Config("auto tol=0.01", "engine=auto:tolerance=0.01", "table resolution"),
+        Config("auto tol=0.005", "engine=auto:tolerance=0.005", "table resolution"),
+        Config("auto tol=0.001", "engine=auto:tolerance=0.001", "table resolution"),
+        Config("kinetics=early", early + ":coverage=exact", "kinetics"),
+        Config("kinetics=table (fast's)", "engine=fast:kinetics=table:photons=disc:coverage=exact",
+               "kinetics"),
+        Config("photons=centre", "engine=fast:kinetics=early:photons=centre:coverage=exact",
+               "exposure"),
+        Config("scanline:1", early + ":coverage=scanline:samples=1", "coverage"),
+        Config("scanline:2", early + ":coverage=scanline:samples=2", "coverage"),
+        Config("scanline:4", early + ":coverage=scanline:samples=4", "coverage"),
+        Config("scanline:8", early + ":coverage=scanline:samples=8", "coverage"),
+        Config("scanline:16", early + ":coverage=scanline:samples=16", "coverage"),
+        Config("scanline (fast's N)", early + ":coverage=scanline", "coverage"),
+    ]
+
+
+class Scene:
+    def __init__(self, name, args, stock, seeds, wedge, width_mm, roi=None, label="",
+                 aperture_um=None, knob_seeds=None):
+        self.name = name
+        self.aperture_um = aperture_um  # granularity aperture; None: --aperture-um
+        self.args = args          # CLI input arguments (before --filmgrain)
+        self.stock = stock
+        self.seeds = seeds        # exact, auto and fast run with every seed
+        # The other configurations (knobs) with these only: the acceptance of
+        # the default needs the precision, the knobs' trade-off does not.
+        self.knob_seeds = knob_seeds or seeds
+        self.wedge = wedge        # True: metrics per wedge step
+        self.width_mm = width_mm
+        self.roi = roi            # (x, y, w, h) or None
+        self.label = label
+
+    def modifiers(self):
+        m = f"stock={self.stock}:width_mm={self.width_mm:g}"
+        if self.roi:
+            m += ":roi=" + ",".join(str(v) for v in self.roi)
+        return m
+
+
+def all_scenes(small):
+    if small:
+        # CI (tests/perf, well under a minute on two cores): one seed; the
+        # paper wedge on its full 6.3 mm strip (6.25 um pixels), the colour
+        # wedge on 3 mm (2.98 um pixels; its grains are 3-3.5 um).
+        return [
+            Scene("wedge-paper", ["--wedge"], "paper", [1], True, 6.3,
+                  label="wedge, paper, 6.3 mm strip, seed 1"),
+            Scene("wedge-color", ["--wedge"], "color-negative", [1], True, 3.0,
+                  label="wedge, color-negative, 3 mm strip, seed 1", aperture_um=24.0),
+        ]
+    return [
+        Scene("wedge-paper", ["--wedge"], "paper", list(range(1, 13)), True, 6.3,
+              knob_seeds=[1, 2, 3],
+              label="wedge, paper (1 layer), 6.3 mm strip, seeds 1-12 (knobs: 1-3)"),
+        Scene("wedge-color", ["--wedge"], "color-negative", [1, 2, 3, 4], True, 6.3,
+              knob_seeds=[1],
+              label="wedge, color-negative (3 layers), 6.3 mm strip, seeds 1-4 (knobs: 1)"),
+        Scene("natural", [GRACE_HOPPER, "--iscolorspace", "sRGB"], "color-negative", [1], False,
+              4.0, roi=(128, 172, 256, 256),
+              label="grace_hopper.jpg, color-negative, 4 mm wide, central 256x256, seed 1"),
+    ]
+
+
+# --------------------------------------------------------------------------
+# Statistics helpers (no scipy: CI machines have numpy only)
+
+Z975 = 1.959963984540054
+
+
+def t975(df):
+    """0.975 quantile of Student's t (Cornish-Fisher expansion in 1/df;
+    better than 1e-3 relative for df >= 3, exact limit for df -> inf)."""
+    if df <= 0:
+        return float("inf")
+    table = {1: 12.7062, 2: 4.3027, 3: 3.1824, 4: 2.7764, 5: 2.5706}
+    if df in table:
+        return table[df]
+    z = Z975
+    return (z + (z ** 3 + z) / (4 * df) + (5 * z ** 5 + 16 * z ** 3 + 3 * z) / (96 * df ** 2)
+            + (3 * z ** 7 + 19 * z ** 5 + 17 * z ** 3 - 15 * z) / (384 * df ** 3))
+
+
+def mean_ci(samples):
+    """Mean and 95% half-width (t) of i.i.d. samples (batch means)."""
+    x = np.asarray(samples, dtype=np.float64)
+    n = x.size
+    if n == 0:
+        return float("nan"), float("nan")
+    if n == 1:
+        return float(x[0]), float("inf")
+    return float(x.mean()), float(t975(n - 1) * x.std(ddof=1) / math.sqrt(n))
+
+
+def two_proportion_p(x1, n1, x2, n2):
+    """Two-sided p-value of the two-proportion z test (pooled variance)."""
+    if n1 == 0 or n2 == 0:
+        return float("nan"), float("nan")
+    p = (x1 + x2) / (n1 + n2)
+    var = p * (1 - p) * (1 / n1 + 1 / n2)
+    diff = x1 / n1 - x2 / n2
+    if var <= 0:
+        return (1.0 if diff == 0 else 0.0), 0.0
+    z = diff / math.sqrt(var)
+    return math.erfc(abs(z) / math.sqrt(2)), z
+
+
+def block_means(a, b):
+    """Means of b x b blocks of a 2-D array (its size a multiple of b)."""
+    h, w = a.shape
+    return a.reshape(h // b, b, w // b, b).mean(axis=(1, 3))
+
+
+def aperture_kernel(diameter_px, supersample=16):
+    """Weights of a circular aperture: each pixel's area inside the circle
+    (supersampled), normalised to sum 1."""
+    r = diameter_px / 2.0
+    k = int(math.ceil(diameter_px)) + 1
+    c = k / 2.0
+    s = (np.arange(supersample) + 0.5) / supersample
+    w = np.zeros((k, k))
+    for j in range(k):
+        for i in range(k):
+            yy = j + s[:, None] - c
+            xx = i + s[None, :] - c
+            w[j, i] = np.mean(xx * xx + yy * yy <= r * r)
+    return w / w.sum()
+
+
+def correlate_valid(a, kernel):
+    """Valid 2-D correlation of a with a small kernel (shifted sums)."""
+    kh, kw = kernel.shape
+    h, w = a.shape
+    if h < kh or w < kw:
+        return np.zeros((0, 0))
+    out = np.zeros((h - kh + 1, w - kw + 1))
+    for j in range(kh):
+        for i in range(kw):
+            if kernel[j, i] != 0.0:
+                out += kernel[j, i] * a[j:j + h - kh + 1, i:i + w - kw + 1]
+    return out
+
+
+# --------------------------------------------------------------------------
+# Scene geometry
+
+def large_grain_radius_um(stock):
+    """Radius at z = 3 of the largest population (99.87% of grains are
+    smaller): the scale of margins and blocks."""
+    r = 0.0
+    for layer in stock["layers"]:
+        for p in layer["populations"]:
+            s = p["diameter_log_sigma"]
+            d = math.exp(math.log(p["diameter_um"]) - 0.5 * s * s + 3.0 * s)
+            r = max(r, d / 2.0)
+    return r
+
+
+def wedge_patches(width_px, height_px, pitch_um, r_um, steps=21, step_px=48):
+    """Patches (step, x0, x1, y0, y1) in scan pixels and the block side."""
+    margin = int(math.ceil(2.0 * r_um / pitch_um))
+    block = max(2, int(math.ceil(4.0 * r_um / pitch_um)))
+    scale = width_px / (steps * step_px)  # scan px per input px (scan = input here)
+    out = []
+    for s in range(steps):
+        x0 = int(round(s * step_px * scale)) + margin
+        x1 = int(round((s + 1) * step_px * scale)) - margin
+        y0, y1 = margin, height_px - margin
+        # Whole blocks only, centred in the interior.
+        nbx, nby = (x1 - x0) // block, (y1 - y0) // block
+        if nbx < 1 or nby < 1:
+            continue
+        ox, oy = ((x1 - x0) - nbx * block) // 2, ((y1 - y0) - nby * block) // 2
+        out.append((s, x0 + ox, x0 + ox + nbx * block, y0 + oy, y0 + oy + nby * block))
+    return out, margin, block
+
+
+def srgb_to_linear(v):
+    v = np.asarray(v, dtype=np.float64)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+# --------------------------------------------------------------------------
+# Rendering
+
+class Renderer:
+    """Runs the CLI into a work directory; reuses earlier renders when asked
+    (the same arguments and the same binary) so the analysis can be redone
+    without rendering again."""
+
+    def __init__(self, binary, work, threads, reuse, log):
+        self.binary = binary
+        self.work = work
+        self.threads = threads
+        self.reuse = reuse
+        self.log = log
+        st = os.stat(binary)
+        self.binary_id = f"{os.path.realpath(binary)}:{st.st_size}:{st.st_mtime_ns}"
+
+    def render(self, scene, config, seed):
+        mods = f"{scene.modifiers()}:{config.modifiers}:seed={seed}"
+        key = hashlib.sha1(f"{scene.args}|{mods}".encode()).hexdigest()[:12]
+        d = os.path.join(self.work, scene.name)
+        os.makedirs(d, exist_ok=True)
+        exr, stats, meta = (os.path.join(d, f"{key}.{ext}") for ext in ("exr", "json", "run.json"))
+        argv = [self.binary, *scene.args, f"--filmgrain:{mods}", "-o", exr, "--stats", stats,
+                "-q"]
+        if self.threads:
+            argv += ["--threads", str(self.threads)]
+        if self.reuse and os.path.exists(meta) and os.path.exists(exr):
+            with open(meta) as f:
+                m = json.load(f)
+            if m.get("argv") == argv and m.get("binary") == self.binary_id:
+                with open(stats) as f:
+                    m["stats"] = json.load(f)
+                self.log(f"  reused {config.name} seed {seed} ({fgperf.fmt_s(m['wall_s'])})")
+                return m, exr
+        res = fgperf.run_cli(argv, stats_path=stats)
+        if not res.ok:
+            raise RuntimeError(f"{' '.join(argv)} failed ({res.returncode}): {res.stderr}")
+        m = {"argv": argv, "binary": self.binary_id, "wall_s": res.wall_s, "cpu_s": res.cpu_s,
+             "peak_rss_mib": res.peak_rss_mib}
+        with open(meta, "w") as f:
+            json.dump(m, f)
+        m["stats"] = res.stats
+        self.log(f"  {scene.name} {config.name:24s} seed {seed}: wall {fgperf.fmt_s(res.wall_s)}, "
+                 f"CPU {fgperf.fmt_s(res.cpu_s)}")
+        return m, exr
+
+
+# --------------------------------------------------------------------------
+# Comparisons
+
+def transmittance(density, base):
+    return np.power(10.0, -(density.astype(np.float64) - base))
+
+
+def compare_wedge(d_path, d_exact, patches, block, kernel, base, max_density):
+    """Per-layer, per-step accumulators for one seed (lists of block
+    differences etc.), merged over seeds by the caller."""
+    nl = d_exact.shape[2]
+    out = []
+    for l in range(nl):
+        Dp, De = d_path[:, :, l].astype(np.float64), d_exact[:, :, l].astype(np.float64)
+        Tp, Te = transmittance(Dp, base), transmittance(De, base)
+        steps = []
+        for (s, x0, x1, y0, y1) in patches:
+            dp, de = Dp[y0:y1, x0:x1], De[y0:y1, x0:x1]
+            tp, te = Tp[y0:y1, x0:x1], Te[y0:y1, x0:x1]
+            rec = {
+                "step": s,
+                "block_dD": (block_means(dp, block) - block_means(de, block)).ravel().tolist(),
+                "block_Tp": block_means(tp, block).ravel().tolist(),
+                "block_Te": block_means(te, block).ravel().tolist(),
+                "Dp_sum": float(dp.sum()), "De_sum": float(de.sum()), "n": int(dp.size),
+                "var_p": [], "var_e": [], "napert": 0, "clamped": 0,
+            }
+            # Granularity: bands 3 aperture diameters tall.
+            kh = kernel.shape[0] if kernel is not None else 0
+            if kernel is not None and (y1 - y0) >= kh and (x1 - x0) >= kernel.shape[1]:
+                nb = max(1, (y1 - y0) // (2 * kh))
+                edges = np.linspace(y0, y1, nb + 1).astype(int)
+                for b in range(nb):
+                    ap = correlate_valid(Tp[edges[b]:edges[b + 1], x0:x1], kernel)
+                    ae = correlate_valid(Te[edges[b]:edges[b + 1], x0:x1], kernel)
+                    if ap.size < 2:
+                        continue
+                    floor = 10.0 ** (-max_density) * 1.0001
+                    rec["clamped"] += int((ap <= floor).sum() + (ae <= floor).sum())
+                    DAp = -np.log10(np.maximum(ap, 1e-300)) + base
+                    DAe = -np.log10(np.maximum(ae, 1e-300)) + base
+                    rec["var_p"].append(float(DAp.var(ddof=1)))
+                    rec["var_e"].append(float(DAe.var(ddof=1)))
+                    rec["napert"] += int(ap.size)
+            steps.append(rec)
+        out.append(steps)
+    return out
+
+
+def merge_wedge(acc, new):
+    if acc is None:
+        return new
+    for l, steps in enumerate(new):
+        for i, rec in enumerate(steps):
+            a = acc[l][i]
+            for k in ("block_dD", "block_Tp", "block_Te", "var_p", "var_e"):
+                a[k] += rec[k]
+            for k in ("Dp_sum", "De_sum", "n", "napert", "clamped"):
+                a[k] += rec[k]
+    return acc
+
+
+def summarise_wedge(acc, layer_names):
+    """Per layer and step: biases with CIs, granularity ratio with CI."""
+    rows = []
+    for l, steps in enumerate(acc):
+        for rec in steps:
+            bias, ci = mean_ci(rec["block_dD"])
+            tp, te = np.asarray(rec["block_Tp"]), np.asarray(rec["block_Te"])
+            Tp, Te = tp.mean(), te.mean()
+            macro = -math.log10(Tp) + math.log10(Te)
+            infl = math.log10(math.e) * (te / Te - tp / Tp)
+            _, macro_ci = mean_ci(infl)
+            D_exact = rec["De_sum"] / rec["n"]
+            vp, ve = np.asarray(rec["var_p"]), np.asarray(rec["var_e"])
+            if vp.size and np.all(ve > 0) and np.all(vp > 0):
+                ratio = math.sqrt(vp.sum() / ve.sum())
+                lr = 0.5 * np.log(vp / ve)
+                _, lci = mean_ci(lr)
+                r_lo, r_hi = ratio * math.exp(-lci), ratio * math.exp(lci)
+                g_exact = math.sqrt(ve.mean())
+            else:
+                ratio = r_lo = r_hi = g_exact = float("nan")
+            rows.append({
+                "layer": layer_names[l], "step": rec["step"], "D_exact": D_exact,
+                "macro_D_exact": -math.log10(Te),
+                "bias_mean": bias, "ci_mean": ci, "bias_macro": macro, "ci_macro": macro_ci,
+                "blocks": len(rec["block_dD"]),
+                "sigma_exact": g_exact, "g_ratio": ratio, "g_lo": r_lo, "g_hi": r_hi,
+                "g_bands": int(vp.size), "apertures": rec["napert"],
+                "clamped_apertures": rec["clamped"],
+            })
+    return rows
+
+
+def same_fates(stats):
+    """Whether a render's grain fates are bit-identical to exact's, from the
+    paths it reports: every population's kinetics chain or early (the chain
+    stopped once decided, same random numbers) and exposure over the disc.
+    Then only the coverage differs and a per-pixel comparison with exact
+    (the converged coverage of the same grains) is meaningful."""
+    for layer in stats["layers"]:
+        m = re.search(r"kinetics=([a-z,]+)", layer["path"])
+        if not m or not set(m.group(1).split(",")) <= {"chain", "early"}:
+            return False
+        if "exposure=disc" not in layer["path"]:
+            return False
+    return True
+
+
+def compare_pixels(d_path, d_exact, base):
+    Tp, Te = transmittance(d_path, base), transmittance(d_exact, base)
+    e = Tp - Te
+    return {"T_rms": float(np.sqrt(np.mean(e * e))), "T_max": float(np.max(np.abs(e))),
+            "identical": bool(np.array_equal(d_path, d_exact))}
+
+
+def compare_natural(d_path, d_exact, edge_mask, block):
+    """Mean density bias over the whole region and over edge / flat blocks
+    (all layers pooled as separate block samples per layer)."""
+    out = {}
+    nl = d_exact.shape[2]
+    h, w = d_exact.shape[:2]
+    h, w = h - h % block, w - w % block
+    per = {"all": [], "edge": [], "flat": []}
+    for l in range(nl):
+        diff = block_means(d_path[:h, :w, l].astype(np.float64)
+                           - d_exact[:h, :w, l].astype(np.float64), block).ravel()
+        per["all"] += diff.tolist()
+        per["edge"] += diff[edge_mask].tolist()
+        per["flat"] += diff[~edge_mask].tolist()
+    for k, v in per.items():
+        out[f"bias_{k}"], out[f"ci_{k}"] = mean_ci(v)
+        out[f"blocks_{k}"] = len(v)
+    return out
+
+
+def natural_edge_mask(scene, block):
+    """Blocks of the ROI whose input luminance varies most (top quartile of
+    the relative std within the block): where grain-centre exposure differs
+    from the disc integral."""
+    img, _, _ = fgperf.read_exr(GRACE_HOPPER)
+    lin = srgb_to_linear(img[:, :, :3])
+    y = lin @ np.array([0.2126, 0.7152, 0.0722])
+    x, yy, w, h = scene.roi
+    y = y[yy:yy + h, x:x + w]
+    h, w = h - h % block, w - w % block
+    y = y[:h, :w]
+    blocks = y.reshape(h // block, block, w // block, block)
+    rel = blocks.std(axis=(1, 3)) / np.maximum(blocks.mean(axis=(1, 3)), 1e-6)
+    return (rel >= np.quantile(rel, 0.75)).ravel()
+
+
+# --------------------------------------------------------------------------
+# Report
+
+def median(v):
+    v = [x for x in v if x == x]
+    return float(np.median(v)) if v else float("nan")
+
+
+def fmt(v, digits=4):
+    if v is None or (isinstance(v, float) and v != v):
+        return "n/a"
+    if isinstance(v, float) and math.isinf(v):
+        return "inf"
+    return f"{v:.{digits}f}"
+
+
+def pixel_t_cell(r):
+    """The "pixel T RMS / max" cell of a configuration's row."""
+    if r["identical"] is None:
+        return "n/a (fates differ)"
+    return "identical" if r["identical"] else f"{fmt_g(r['T_rms'])} / {fmt_g(r['T_max'])}"
+
+
+def fmt_g(v, sig=2):
+    if v is None or v != v:
+        return "n/a"
+    if v == 0:
+        return "0"
+    return f"{v:.{sig}g}"
+
+
+def verdict_density(rows):
+    """Auto at the default tolerance against |bias| <= 0.003, per step:
+    'within' if the whole 95% CI lies inside +-0.003, 'outside' if it lies
+    entirely beyond, else 'unresolved'."""
+    counts = {"within": 0, "unresolved": 0, "outside": 0}
+    for r in rows:
+        for b, c in ((r["bias_mean"], r["ci_mean"]), (r["bias_macro"], r["ci_macro"])):
+            if abs(b) + c <= TOLERANCE_DENSITY:
+                counts["within"] += 1
+            elif abs(b) - c > TOLERANCE_DENSITY:
+                counts["outside"] += 1
+            else:
+                counts["unresolved"] += 1
+    return counts
+
+
+def verdict_granularity(rows):
+    counts = {"within": 0, "unresolved": 0, "outside": 0, "n/a": 0}
+    lo_lim, hi_lim = 1 - TOLERANCE_GRANULARITY, 1 + TOLERANCE_GRANULARITY
+    for r in rows:
+        if r["g_ratio"] != r["g_ratio"] or r["clamped_apertures"]:
+            counts["n/a"] += 1
+        elif r["g_lo"] >= lo_lim and r["g_hi"] <= hi_lim:
+            counts["within"] += 1
+        elif r["g_hi"] < lo_lim or r["g_lo"] > hi_lim:
+            counts["outside"] += 1
+        else:
+            counts["unresolved"] += 1
+    return counts
+
+
+SHORT = {"auto": "auto", "auto, table forced": "auto+table", "fast": "fast", "auto tol=0.01": "tol .01", "auto tol=0.005": "tol .005",
+         "auto tol=0.001": "tol .001", "kinetics=early": "early", "kinetics=table (fast's)":
+         "table(fast)", "photons=centre": "centre", "scanline (fast's N)": "scan(fast N)"}
+
+
+def make_plot(summary, out_png, small):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    panels = [
+        ("max_abs_bias_mean", "ci_at_max", "wedge: max |bias| of patch mean of pixel densities",
+         TOLERANCE_DENSITY, True),
+        ("max_abs_bias_macro", "ci_at_max_macro",
+         "wedge: max |bias| of patch macro density -log10(mean T)", TOLERANCE_DENSITY, True),
+        ("max_abs_g_err", None, "wedge: max |RMS granularity ratio - 1|", TOLERANCE_GRANULARITY,
+         True),
+        ("T_rms", None, "per-pixel transmittance RMS error vs exact, same grains", None, False),
+    ]
+    fams = sorted({r["family"] for r in summary})
+    colours = dict(zip(fams, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
+    markers = {"wedge-paper": "o", "wedge-color": "s", "natural": "^"}
+    floor = 1e-5
+    fig, axes = plt.subplots(2, 2, figsize=(15, 11))
+    for ax, (key, cikey, title, limit, wedge_only) in zip(axes.ravel(), panels):
+        for r in summary:
+            v = r.get(key)
+            if v is None or v != v or r["config"] == "exact":
+                continue
+            if wedge_only and not r["scene"].startswith("wedge"):
+                continue
+            t = r["cpu_s"]
+            y = max(v, floor)
+            ax.scatter(t, y, marker=markers.get(r["scene"], "o"), s=160 if r["default"] else 40,
+                       color=colours[r["family"]], edgecolor="k" if r["default"] else "none",
+                       linewidth=1.5, zorder=3)
+            label = SHORT.get(r["config"], r["config"].replace("scanline:", "scan"))
+            if r["default"]:
+                label = "auto (default)"
+            ax.annotate(label, (t, y), fontsize=7 if r["default"] else 6, xytext=(4, 2),
+                        textcoords="offset points", fontweight="bold" if r["default"] else None)
+            if cikey and r.get(cikey) == r.get(cikey) and r.get(cikey) is not None:
+                ax.plot([t, t], [max(floor, v - r[cikey]), v + r[cikey]],
+                        color=colours[r["family"]], lw=0.8, zorder=2)
+        for r in summary:
+            if r["config"] == "exact" and (not wedge_only or r["scene"].startswith("wedge")):
+                ax.axvline(r["cpu_s"], color=colours[r["family"]], lw=0.8, ls=":")
+                ax.annotate(f"exact, {r['scene']}", (r["cpu_s"], floor), rotation=90, fontsize=6,
+                            color="grey", xytext=(-9, 4), textcoords="offset points")
+        if limit:
+            ax.axhline(limit, color="red", lw=0.8, ls="--")
+            ax.annotate(f"acceptance for auto: {limit:g}", (0.01, limit), color="red", fontsize=7,
+                        xycoords=("axes fraction", "data"), xytext=(0, 3),
+                        textcoords="offset points")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("CPU seconds per render (user + sys, median over seeds)")
+        ax.set_title(title, fontsize=9)
+        ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    handles = [plt.Line2D([], [], marker="o", ls="", color=c, label=f) for f, c in colours.items()]
+    handles += [plt.Line2D([], [], marker=m, ls="", color="k", label=s)
+                for s, m in markers.items() if any(r["scene"] == s for r in summary)]
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=8)
+    fig.suptitle("filmgrain: error against run time" + (" (small CI version)" if small else "")
+                 + f". Errors below {floor:g} (e.g. 0: identical) are drawn at {floor:g}; "
+                 "vertical bars: 95% CI at the worst step; dotted: the exact engine's time",
+                 fontsize=10)
+    fig.tight_layout(rect=(0, 0.03, 1, 0.97))
+    fig.savefig(out_png, dpi=100)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bin", default="build/plugin/filmgrain", help="the filmgrain CLI")
+    ap.add_argument("--out", default="docs/performance", help="output directory")
+    ap.add_argument("--work", default=None,
+                    help="renders go here (default: $TMPDIR/filmgrain-error-report[-small])")
+    ap.add_argument("--small", action="store_true", help="the small CI version")
+    ap.add_argument("--scenes", default=None, help="comma-separated subset of scenes")
+    ap.add_argument("--configs", default=None, help="comma-separated subset of configurations")
+    ap.add_argument("--seeds", default=None, help="comma-separated seeds (all scenes)")
+    ap.add_argument("--threads", type=int, default=0, help="--threads of each render (0: all)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="reuse renders already in --work (same arguments and binary)")
+    ap.add_argument("--keep", action="store_true", help="keep --work afterwards")
+    ap.add_argument("--aperture-um", type=float, default=None,
+                    help=f"granularity aperture diameter (default {APERTURE_UM:g} um; "
+                         "--small: 48 um on paper, 24 um on the 3 mm colour wedge, whose "
+                         "steps are 143 um wide)")
+    ap.add_argument("--extra-auto", default="",
+                    help="modifiers appended to the auto configurations (auto, auto with the "
+                         "table forced), e.g. exposure=0.05: "
+                         "a deliberately wrong default, to see tests/perf fail")
+    args = ap.parse_args(argv)
+    if args.aperture_um is None:
+        args.aperture_um = APERTURE_UM
+
+    t_start = time.perf_counter()
+    binary = os.path.abspath(args.bin)
+    if not os.access(binary, os.X_OK):
+        sys.exit(f"error_report: {args.bin} is not an executable (build first)")
+    os.makedirs(args.out, exist_ok=True)
+    import tempfile
+    work = args.work or os.path.join(tempfile.gettempdir(),
+                                     "filmgrain-error-report" + ("-small" if args.small else ""))
+    os.makedirs(work, exist_ok=True)
+    log_lines = []
+
+    def log(msg):
+        print(msg, flush=True)
+        log_lines.append(msg)
+
+    configs = all_configs()
+    if args.small:
+        configs = [c for c in configs if c.family == "engine"]
+    if args.configs:
+        want = set(args.configs.split(","))
+        configs = [c for c in configs if c.name in want or c.name == "exact"]
+    if args.extra_auto:
+        for c in configs:
+            if c.accept:
+                c.modifiers += ":" + args.extra_auto
+    scenes = all_scenes(args.small)
+    if args.scenes:
+        scenes = [s for s in scenes if s.name in args.scenes.split(",")]
+    if args.seeds:
+        for s in scenes:
+            s.seeds = s.knob_seeds = [int(v) for v in args.seeds.split(",")]
+
+    renderer = Renderer(binary, work, args.threads, args.reuse, log)
+    summary, steps_rows, natural_rows, acceptance = [], [], [], {}
+    for scene in scenes:
+        stock = fgperf.stock_json(binary, scene.stock)
+        base, max_d = stock["base_density"], stock["max_density"]
+        r_um = large_grain_radius_um(stock)
+        log(f"{scene.name}: {scene.label}")
+        per_config = {c.name: {"runs": [], "wedge": None, "pixels": [], "natural": None}
+                      for c in configs}
+        geometry = {}
+        for seed in scene.seeds:
+            exact_meta, exact_exr = renderer.render(scene, configs[0], seed)
+            d_exact, names, _ = fgperf.read_exr(exact_exr)
+            pitch = exact_meta["stats"]["scan"]["pitch_x_um"]
+            if scene.wedge:
+                patches, margin, block = wedge_patches(d_exact.shape[1], d_exact.shape[0], pitch,
+                                                       r_um)
+                ap_um = scene.aperture_um or args.aperture_um
+                ap_px = ap_um / pitch
+                kernel = aperture_kernel(ap_px) if ap_px <= 40 else None
+                geometry = {"pitch_um": pitch, "margin_px": margin, "block_px": block,
+                            "aperture_um": ap_um, "aperture_px": ap_px, "patches": len(patches),
+                            "patch_px": [patches[0][2] - patches[0][1],
+                                         patches[0][4] - patches[0][3]] if patches else None}
+            else:
+                block = max(2, int(math.ceil(4.0 * r_um / pitch)))
+                edge_mask = natural_edge_mask(scene, block)
+                geometry = {"pitch_um": pitch, "block_px": block,
+                            "edge_blocks": int(edge_mask.sum()), "blocks": int(edge_mask.size)}
+            for c in configs:
+                if c.family != "engine" and seed not in scene.knob_seeds:
+                    continue
+                meta, exr = (exact_meta, exact_exr) if c.name == "exact" else \
+                    renderer.render(scene, c, seed)
+                d, _, _ = fgperf.read_exr(exr)
+                pc = per_config[c.name]
+                pc["runs"].append(meta)
+                if scene.wedge:
+                    pc["wedge"] = merge_wedge(pc["wedge"], compare_wedge(
+                        d, d_exact, patches, block, kernel, base, max_d))
+                else:
+                    acc = compare_natural(d, d_exact, edge_mask, block)
+                    pc["natural"] = acc if pc["natural"] is None else pc["natural"]
+                    pc.setdefault("natural_seeds", []).append(acc)
+                pc.setdefault("seeds", []).append(seed)
+                if same_fates(meta["stats"]):
+                    pc["pixels"].append(compare_pixels(d, d_exact, base))
+
+        exact_runs = per_config["exact"]["runs"]
+        exact_cpu = median([m["cpu_s"] for m in exact_runs])
+        exact_wall = median([m["wall_s"] for m in exact_runs])
+        for c in configs:
+            pc = per_config[c.name]
+            runs = pc["runs"]
+            st0 = runs[0]["stats"]
+            row = {
+                "scene": scene.name, "config": c.name, "family": c.family,
+                "modifiers": c.modifiers, "default": c.default, "seeds": len(runs),
+                "cpu_s": median([m["cpu_s"] for m in runs]),
+                "wall_s": median([m["wall_s"] for m in runs]),
+                "simulate_s": median([m["stats"]["seconds"]["simulate"] for m in runs]),
+                "setup_s": median([sum(l["setup_seconds"] for l in m["stats"]["layers"])
+                                   for m in runs]),
+                "peak_rss_mib": max(m["peak_rss_mib"] for m in runs),
+                "path": st0["layers"][0]["path"],
+                "error_estimate": max(l["error_estimate"] for m in runs
+                                      for l in m["stats"]["layers"]),
+            }
+            row["cpu_speedup"] = exact_cpu / row["cpu_s"] if row["cpu_s"] > 0 else float("nan")
+            row["wall_speedup"] = exact_wall / row["wall_s"] if row["wall_s"] > 0 else float("nan")
+            # Developed fraction, pooled over seeds, per layer: the smallest p.
+            pmin, dfrac = float("inf"), 0.0
+            for li in range(len(st0["layers"])):
+                x1 = sum(m["stats"]["layers"][li]["developed"] for m in runs)
+                n1 = sum(m["stats"]["layers"][li]["grains"] for m in runs)
+                # exact with the same seeds (the knobs run with fewer)
+                ex = [m for m, sd in zip(exact_runs, per_config["exact"]["seeds"])
+                      if sd in pc["seeds"]]
+                x2 = sum(m["stats"]["layers"][li]["developed"] for m in ex)
+                n2 = sum(m["stats"]["layers"][li]["grains"] for m in ex)
+                p, _ = two_proportion_p(x1, n1, x2, n2)
+                if p < pmin:
+                    pmin, dfrac = p, x1 / n1 - x2 / n2
+            row["developed_p_min"] = pmin
+            row["developed_frac_diff"] = dfrac
+            if pc["pixels"]:
+                row["T_rms"] = float(np.sqrt(np.mean([p["T_rms"] ** 2 for p in pc["pixels"]])))
+                row["T_max"] = max(p["T_max"] for p in pc["pixels"])
+                row["identical"] = all(p["identical"] for p in pc["pixels"])
+            else:
+                row["T_rms"] = row["T_max"] = float("nan")
+                row["identical"] = None
+            if scene.wedge:
+                rows = summarise_wedge(pc["wedge"], [l["name"] for l in st0["layers"]])
+                for r in rows:
+                    steps_rows.append({"scene": scene.name, "config": c.name, **r})
+                imax = int(np.argmax([abs(r["bias_mean"]) for r in rows]))
+                row["max_abs_bias_mean"] = abs(rows[imax]["bias_mean"])
+                row["ci_at_max"] = rows[imax]["ci_mean"]
+                row["step_at_max"] = f"{rows[imax]['layer']}{rows[imax]['step']}"
+                jmax = int(np.argmax([abs(r["bias_macro"]) for r in rows]))
+                row["max_abs_bias_macro"] = abs(rows[jmax]["bias_macro"])
+                row["ci_at_max_macro"] = rows[jmax]["ci_macro"]
+                row["rms_bias_mean"] = float(np.sqrt(np.mean([r["bias_mean"] ** 2
+                                                              for r in rows])))
+                row["median_ci_mean"] = median([r["ci_mean"] for r in rows])
+                row["steps_ci_excl_0"] = sum(abs(r["bias_mean"]) > r["ci_mean"] for r in rows)
+                row["steps"] = len(rows)
+                g = [r for r in rows if r["g_ratio"] == r["g_ratio"] and not r["clamped_apertures"]]
+                row["max_abs_g_err"] = max((abs(r["g_ratio"] - 1) for r in g), default=float("nan"))
+                row["median_g_ci"] = median([(r["g_hi"] - r["g_lo"]) / 2 for r in g])
+                row["g_steps"] = len(g)
+                if c.accept:
+                    acceptance[f"{scene.name}, {c.name}"] = {
+                        "density": verdict_density(rows), "granularity": verdict_granularity(rows),
+                        "max_abs_bias_mean": row["max_abs_bias_mean"],
+                        "max_abs_bias_macro": row["max_abs_bias_macro"],
+                        "max_abs_g_err": row["max_abs_g_err"],
+                        "worst_density_ci_bound": max(max(abs(r["bias_mean"]) + r["ci_mean"],
+                                                          abs(r["bias_macro"]) + r["ci_macro"])
+                                                      for r in rows),
+                        "worst_g_ci_bound": max((max(abs(r["g_lo"] - 1), abs(r["g_hi"] - 1))
+                                                 for r in g), default=float("nan")),
+                    }
+            else:
+                nat = pc["natural"]
+                row.update({k: v for k, v in nat.items()})
+                natural_rows.append({"scene": scene.name, "config": c.name, **nat})
+            row["geometry"] = geometry
+            summary.append(row)
+
+    elapsed = time.perf_counter() - t_start
+    write_outputs(args, summary, steps_rows, acceptance, log_lines, elapsed, binary, scenes)
+    if not args.keep and not args.reuse and args.work is None:
+        shutil.rmtree(work, ignore_errors=True)
+    log(f"error_report: {elapsed:.0f} s; wrote {args.out}")
+    return 0
+
+
+def write_outputs(args, summary, steps_rows, acceptance, log_lines, elapsed, binary, scenes):
+    out = args.out
+    cols = ["scene", "config", "family", "modifiers", "path", "seeds", "cpu_s", "wall_s",
+            "simulate_s", "setup_s", "peak_rss_mib", "cpu_speedup", "wall_speedup",
+            "error_estimate", "max_abs_bias_mean", "ci_at_max", "step_at_max",
+            "max_abs_bias_macro", "ci_at_max_macro", "rms_bias_mean", "median_ci_mean", "steps_ci_excl_0", "steps",
+            "max_abs_g_err", "median_g_ci", "g_steps", "T_rms", "T_max", "identical",
+            "developed_p_min", "developed_frac_diff", "bias_all", "ci_all", "bias_edge",
+            "ci_edge", "bias_flat", "ci_flat"]
+    with open(os.path.join(out, "error_report.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=cols, extrasaction="ignore")
+        w.writeheader()
+        for r in summary:
+            w.writerow(r)
+    if steps_rows:
+        with open(os.path.join(out, "error_steps.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(steps_rows[0].keys()))
+            w.writeheader()
+            for r in steps_rows:
+                w.writerow(r)
+    with open(os.path.join(out, "error_report.json"), "w") as f:
+        json.dump({"summary": summary, "steps": steps_rows, "acceptance": acceptance,
+                   "seconds": elapsed, "small": args.small, "log": log_lines,
+                   "machine": fgperf.machine_note()}, f, indent=1, default=str)
+    make_plot(summary, os.path.join(out, "error_vs_time.png"), args.small)
+    write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scenes)
+
+
+def write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scenes):
+    repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    L = []
+    L.append("# Error against run time" + (" (small CI version)" if args.small else ""))
+    L.append("")
+    L.append("Generated by `/usr/bin/python3 tools/perf/error_report.py --bin "
+             f"{os.path.relpath(binary, repo)} --out {os.path.relpath(os.path.abspath(args.out), repo)}"
+             + (" --small" if args.small else "") + f"` in {elapsed / 60:.1f} min at commit "
+             f"{fgperf.git_describe(repo)}; {fgperf.machine_note()}. Times are whole CLI runs "
+             "(tables, render, EXR write); the machine is shared, so compare ratios within "
+             "this run, never absolute seconds across runs.")
+    L.append("")
+    L.append("Scenes: " + "; ".join(f"`{s.name}` = {s.label}" for s in scenes) + ".")
+    L.append("")
+    L.append("![error against time](error_vs_time.png)")
+    L.append("")
+    if acceptance:
+        L.append("## Does auto (default tolerance 0.002) agree with exact?")
+        L.append("")
+        L.append("`auto` as it chooses, and `auto` with its table forced (what it runs on frames "
+                 "large enough for the table to pay; on these wedges it may choose the chain, "
+                 "which is exact).")
+        L.append("")
+        L.append(f"Criterion: |patch-mean density bias| <= {TOLERANCE_DENSITY} (both the mean of "
+                 "pixel densities and the macro density) and |RMS granularity ratio - 1| <= "
+                 f"{TOLERANCE_GRANULARITY:g} on every wedge step and layer. A step counts as "
+                 "*within* when its whole 95% CI lies inside the band, *outside* when the whole "
+                 "CI lies beyond it, *unresolved* otherwise (the measurement is not precise "
+                 "enough to decide). Granularity steps where an aperture reads the density clamp "
+                 "are left out (n/a).")
+        L.append("")
+        L.append("| scene, configuration | max abs bias (mean D) | max abs bias (macro D) | worst abs bias + CI | "
+                 "density steps within / unresolved / outside | max abs(ratio - 1) | "
+                 "worst CI bound | granularity steps within / unresolved / outside / n/a | "
+                 "verdict |")
+        L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+        for sc, a in acceptance.items():
+            dv, gv = a["density"], a["granularity"]
+            if dv["outside"] or gv["outside"]:
+                verdict = "**fails**: some step is outside with 95% confidence"
+            elif dv["unresolved"] or gv["unresolved"]:
+                verdict = ("no step is shown outside; point estimates "
+                           + ("within" if a["max_abs_bias_mean"] <= TOLERANCE_DENSITY
+                              and a["max_abs_bias_macro"] <= TOLERANCE_DENSITY
+                              and not (a["max_abs_g_err"] > TOLERANCE_GRANULARITY)
+                              else "**not all within**")
+                           + "; some steps unresolved")
+            else:
+                verdict = "**agrees**: every step within with 95% confidence"
+            L.append(f"| {sc} | {fmt(a['max_abs_bias_mean'])} | {fmt(a['max_abs_bias_macro'])} | "
+                     f"{fmt(a['worst_density_ci_bound'])} | {dv['within']} / {dv['unresolved']} / "
+                     f"{dv['outside']} | {fmt(a['max_abs_g_err'], 3)} | "
+                     f"{fmt(a['worst_g_ci_bound'], 3)} | {gv['within']} / {gv['unresolved']} / "
+                     f"{gv['outside']} / {gv['n/a']} | {verdict} |")
+        L.append("")
+        L.append("(Density steps count each wedge step and layer twice: mean-of-pixels and macro.)")
+        L.append("")
+
+    for sc in scenes:
+        rows = [r for r in summary if r["scene"] == sc.name]
+        if not rows:
+            continue
+        g = rows[0]["geometry"]
+        L.append(f"## {sc.name}: {sc.label}")
+        L.append("")
+        if sc.wedge:
+            L.append(f"Scan pixels {g['pitch_um']:.3g} um; patch = step interior "
+                     f"{g['patch_px'][0]}x{g['patch_px'][1]} px (margin {g['margin_px']} px); "
+                     f"blocks {g['block_px']} px; aperture {g['aperture_um']:g} um = "
+                     f"{g['aperture_px']:.2f} px.")
+            L.append("")
+            L.append("| configuration | path (first layer) | CPU s | wall s | speed-up (CPU) | "
+                     "table setup s | engine's error estimate | max abs bias mean D (95% CI, step) "
+                     "| max abs bias macro D | steps with CI excluding 0 | max abs(G ratio - 1) "
+                     "(median CI) | pixel T RMS / max | developed p (min over layers) |")
+            L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+            for r in rows:
+                pix = pixel_t_cell(r)
+                L.append(
+                    f"| {'**' + r['config'] + '** (default)' if r['default'] else r['config']} | "
+                    f"`{r['path']}` | {r['cpu_s']:.2f} | {r['wall_s']:.2f} | "
+                    f"{r['cpu_speedup']:.2f}x | {r['setup_s']:.2f} | {fmt_g(r['error_estimate'])} | "
+                    f"{fmt(r['max_abs_bias_mean'])} (+-{fmt(r['ci_at_max'])}, {r['step_at_max']}) | "
+                    f"{fmt(r['max_abs_bias_macro'])} | {r['steps_ci_excl_0']}/{r['steps']} | "
+                    f"{fmt(r['max_abs_g_err'], 3)} (+-{fmt(r['median_g_ci'], 3)}) | {pix} | "
+                    f"{fmt_g(r['developed_p_min'], 3)} |")
+        else:
+            L.append(f"Scan pixels {g['pitch_um']:.3g} um; blocks {g['block_px']} px; "
+                     f"{g['edge_blocks']} of {g['blocks']} blocks per layer are 'edge' blocks "
+                     "(top quartile of relative luminance std in the input).")
+            L.append("")
+            L.append("| configuration | path (first layer) | CPU s | wall s | speed-up (CPU) | "
+                     "bias mean D, all blocks (95% CI) | edge blocks | flat blocks | "
+                     "pixel T RMS / max | developed p (min over layers) |")
+            L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+            for r in rows:
+                pix = pixel_t_cell(r)
+                L.append(
+                    f"| {'**' + r['config'] + '** (default)' if r['default'] else r['config']} | "
+                    f"`{r['path']}` | {r['cpu_s']:.2f} | {r['wall_s']:.2f} | "
+                    f"{r['cpu_speedup']:.2f}x | {fmt(r['bias_all'])} (+-{fmt(r['ci_all'])}) | "
+                    f"{fmt(r['bias_edge'])} (+-{fmt(r['ci_edge'])}) | "
+                    f"{fmt(r['bias_flat'])} (+-{fmt(r['ci_flat'])}) | {pix} | "
+                    f"{fmt_g(r['developed_p_min'], 3)} |")
+        L.append("")
+
+    # Per-step table for the default.
+    dsteps = [r for r in steps_rows if r["config"] in ("auto", "auto, table forced")]
+    if dsteps:
+        L.append("## auto and auto with the table forced, per wedge step")
+        L.append("")
+        L.append("| scene | configuration | layer | step | D exact (mean) | bias mean D | 95% CI | bias macro D | "
+                 "95% CI | sigma_D exact | G ratio | 95% CI | blocks |")
+        L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+        for r in dsteps:
+            clamp = " (clamped)" if r["clamped_apertures"] else ""
+            L.append(f"| {r['scene']} | {r['config']} | {r['layer']} | {r['step']} | "
+                     f"{r['D_exact']:.3f} | "
+                     f"{r['bias_mean']:+.4f} | +-{r['ci_mean']:.4f} | {r['bias_macro']:+.4f} | "
+                     f"+-{r['ci_macro']:.4f} | {fmt(r['sigma_exact'], 3)} | "
+                     f"{fmt(r['g_ratio'], 3)}{clamp} | [{fmt(r['g_lo'], 3)}, {fmt(r['g_hi'], 3)}] | "
+                     f"{r['blocks']} |")
+        L.append("")
+    L.append("## Definitions")
+    L.append("")
+    doc = __doc__
+    L.append("```")
+    L.append(doc[doc.index("Metrics"):].rstrip())
+    L.append("```")
+    L.append("")
+    with open(os.path.join(args.out, "error_report.md"), "w") as f:
+        f.write("\n".join(L))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
