@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <cmath>
 #include <mutex>
 #include <sstream>
 #include <tuple>
 
 #include "rng.h"
+#include "sampling.h"
 
 namespace filmgrain {
 
@@ -53,6 +55,38 @@ RegionValues region_values(const LayerExposure& ex, const InputRegion& r)
             }
         }
     return out;
+}
+
+/// Chain steps (events and photon arrivals) per grain that the
+/// early-stopped chain (KineticsMethod::early_stop) spends on a population
+/// at the stock's grey exposure,
+/// estimated from a fixed pilot sample of grains: sizes from the
+/// population's distribution, photon counts, develop uniforms and chains as
+/// the render draws them. The cost the table would save; deterministic
+/// (seeded), and a property of the stock and the scene, not of the pixels.
+double early_stop_steps_per_grain(const Population& pop, const KineticsRates& rates,
+                                   double photons_per_um2, double shutter_s,
+                                   const Development& dev, uint64_t key)
+{
+    constexpr int kPilotGrains = 256;
+    const double s  = pop.diameter_log_sigma;
+    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
+    uint64_t steps = 0;
+    for (int i = 0; i < kPilotGrains; ++i) {
+        Rng draw(hash_ids(key, static_cast<uint64_t>(i)), Stage::photons);
+        const double u_dev = draw.uniform();
+        const uint64_t needed = dev.n4_needed(u_dev);
+        const double z     = std::clamp(normal_quantile(draw.uniform_open0()), -9.0, 9.0);
+        const double d_um  = std::exp(mu + s * z);
+        const uint64_t n   = sample_poisson(photons_per_um2 * M_PI / 4.0 * d_um * d_um, draw);
+        if (needed == 0 || n < 4 || needed == std::numeric_limits<uint64_t>::max())
+            continue;
+        Rng chain(hash_ids(key, static_cast<uint64_t>(i)), Stage::kinetics);
+        uint64_t events = 0, arrivals = 0;
+        simulate_latent_image(n, shutter_s, rates, chain, &events, needed, &arrivals);
+        steps += events + arrivals;
+    }
+    return static_cast<double>(steps) / kPilotGrains;
 }
 
 /// Poisson pmf over [n0, n1] by recurrence from the mode (no lgamma per
@@ -203,6 +237,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
     const bool exact = settings.engine == Engine::exact;
     const bool fast  = settings.engine == Engine::fast;
+    const Development development(stock);
 
     // A table depends only on the rates (the shutter and development are
     // the scene's): populations with the same rates share one, built once
@@ -212,8 +247,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         DevelopTable::Options options;
         std::shared_ptr<const DevelopTable> table;
         double seconds = 0.0;
-        /// Chain events the grains it serves would cost without it.
-        double grain_events = 0.0;
+        /// Chain steps the grains it serves would cost without it.
+        double grain_steps = 0.0;
     };
     std::vector<TableRequest> requests;
     struct Need {
@@ -223,7 +258,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     };
     std::vector<Need> needs;
     std::vector<double> v_max(stock.layers.size(), 0.0);
-    std::vector<double> grain_events(stock.layers.size(), 0.0);
 
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const Layer& layer = stock.layers[l];
@@ -287,12 +321,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                     " absorbed photons per mean grain (population ", p, "), above the limit of ",
                     format_g(kMaxMeanPhotonsPerGrain),
                     " (README, Limits and guarantees): lower exposure= or clamp the input");
-            // What the chains of the frame's grains would cost without a
-            // table at grey: about one event per absorbed photon. (The whole
-            // frame, and grey rather than the pixels: a ROI render must
-            // decide as the full frame does.)
-            const double events = pop.grains_per_um2 * frame.width_um * frame.height_um
-                                  * mean_grain_photons * kGreyValue;
             if (exact) {
                 pp.kinetics = KineticsMethod::chain;
                 continue;
@@ -311,6 +339,18 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pp.kinetics = want;
             if (want != KineticsMethod::table)
                 continue;
+            // What the early-stopped chains of the frame's grains would cost
+            // without a table, at grey. (The whole frame, and grey rather
+            // than the pixels: a ROI render must decide as the full frame
+            // does.) Not needed when the table is asked for explicitly.
+            const double steps
+                = settings.kinetics
+                      ? 0.0
+                      : pop.grains_per_um2 * frame.width_um * frame.height_um
+                            * early_stop_steps_per_grain(
+                                pop, pp.rates, pp.photons_per_value_um2 * kGreyValue,
+                                scene.shutter_s, development,
+                                hash_ids(scene.seed, 0x9170, l, p));
             // The photon count of a grain short of the largest ones at the
             // table's top value, plus 6 Poisson sigmas; brighter grains run
             // the early-stopped chain (quickly decided: they develop).
@@ -342,13 +382,13 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 req.options.target_standard_error = target;
                 req.options.stream_key            = hash_ids(scene.seed, 0x7ab1e, r);
                 req.options.nthreads              = settings.nthreads;
-                req.grain_events                  = events;
+                req.grain_steps                   = steps;
                 requests.push_back(req);
             } else {
                 auto& o       = requests[r].options;
                 o.max_photons = std::max(o.max_photons, n_max);
                 o.target_standard_error = std::min(o.target_standard_error, target);
-                requests[r].grain_events += events;
+                requests[r].grain_steps += steps;
             }
             needs.push_back({ l, p, r, pp.photons_per_value_um2 * v_max[l],
                               n_need > kTablePhotonCap });
@@ -357,16 +397,27 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         out.push_back(std::move(plan));
     }
 
-    // A table is built only when it costs fewer chain events than the
-    // frame's grains would cost without it (few grains, large ones):
-    // otherwise the chain runs, stopped once each grain's fate is decided.
+    // A table is built only when it costs fewer chain steps (events and
+    // photon arrivals) than the frame's grains would spend in the
+    // early-stopped chain, which decides most grains within a few steps:
+    // otherwise that chain runs, with the exact engine's results and no
+    // error of its own.
     // The decision depends on the table's full cost only, never on which
     // tables earlier renders left in the cache, nor on the ROI.
     for (TableRequest& req : requests) {
         const auto t0 = std::chrono::steady_clock::now();
         // kinetics=table asked for explicitly: built whatever it costs.
-        req.options.event_budget
-            = settings.kinetics ? 0 : static_cast<uint64_t>(std::clamp(req.grain_events, 1.0, 1e18));
+        // Otherwise only when predicted to cost less than the chains it
+        // replaces, and stopped (deterministically) if it costs more than
+        // twice that after all.
+        if (!settings.kinetics) {
+            if (DevelopTable::predicted_steps(req.options, req.rates, scene.shutter_s,
+                                              development)
+                > req.grain_steps)
+                continue;
+            req.options.step_budget
+                = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
+        }
         req.table   = cached_table(req.rates, scene.shutter_s, stock, req.options);
         req.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
@@ -379,13 +430,13 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             plan.setup_seconds += rq.seconds;
             charged[need.request] = true;
         }
-        if (!rq.table->complete()
-            || (rq.options.event_budget && rq.table->total_events() > rq.options.event_budget)) {
+        if (!rq.table || !rq.table->complete()
+            || (rq.options.step_budget && rq.table->total_steps() > rq.options.step_budget)) {
             pp.kinetics = KineticsMethod::early_stop;
             std::ostringstream why;
             why << "population " << need.population
-                << ": a table of P(develop|N) would cost more chain events than the ~"
-                << format_g(rq.grain_events)
+                << ": a table of P(develop|N) would cost more chain steps than the ~"
+                << format_g(rq.grain_steps)
                 << " its grains need: the chain runs until each outcome is decided; ";
             plan.reason += why.str();
             continue;

@@ -14,7 +14,7 @@ double rate_scale_for_area(double area_um2, double mean_area_um2, double rate_ar
 
 LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
                                   const KineticsRates& rates, Rng& rng, uint64_t* events,
-                                  uint64_t stop_at_n4)
+                                  uint64_t stop_at_n4, uint64_t* arrivals)
 {
     LatentImage c;
     uint64_t e         = 0;  // free electrons
@@ -100,6 +100,8 @@ LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
     }
     if (events)
         *events = n_events;
+    if (arrivals)
+        *arrivals = absorbed_photons - remaining;
     return c;
 }
 

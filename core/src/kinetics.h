@@ -50,9 +50,14 @@ double rate_scale_for_area(double area_um2, double mean_area_um2, double rate_ar
 /// counts at that moment). The trajectory up to that point is the one the
 /// full chain takes with the same stream, so "n4 >= k" is decided exactly as
 /// by the full chain. Default: run to the end.
+///
+/// `arrivals` (optional) receives the photon arrivals processed (all of
+/// them unless stopped early): the chain's cost is about arrivals + events
+/// loop steps.
 LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
                                   const KineticsRates& rates, Rng& rng,
                                   uint64_t* events     = nullptr,
-                                  uint64_t stop_at_n4 = std::numeric_limits<uint64_t>::max());
+                                  uint64_t stop_at_n4 = std::numeric_limits<uint64_t>::max(),
+                                  uint64_t* arrivals  = nullptr);
 
 }  // namespace filmgrain

@@ -22,15 +22,15 @@ struct NodeResult {
 /// survival is below the target. Each run contributes its survival
 /// probability (1 - f)(1 - d)^n4: a conditional expectation, with less
 /// variance than counting developed grains.
-/// Events spent by a build so far, against its budget (Options).
+/// Chain steps spent by a build so far, against its budget (Options).
 struct Budget {
     uint64_t limit = 0;  ///< 0: none
     std::atomic<uint64_t> spent { 0 };
     std::atomic<bool> exceeded { false };
-    /// Adds a batch's events; false once the budget is exceeded.
-    bool charge(uint64_t events)
+    /// Adds a batch's steps; false once the budget is exceeded.
+    bool charge(uint64_t steps)
     {
-        if (limit && (spent += events) > limit)
+        if (limit && (spent += steps) > limit)
             exceeded = true;
         return !exceeded;
     }
@@ -54,6 +54,7 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
         if (budget.exceeded)
             return r;
         const uint64_t events_before = r.events;
+        const int done_before        = done;
         for (int i = 0; i < batch && done < o.max_samples; ++i, ++done) {
             Rng rng(hash_ids(o.stream_key, 0x7ab1e, n, static_cast<uint64_t>(done)),
                     Stage::kinetics);
@@ -64,7 +65,9 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
             sum2 += s * s;
             r.events += events;
         }
-        if (!budget.charge(r.events - events_before))
+        // Cost in chain steps: every run processes all n arrivals.
+        if (!budget.charge(r.events - events_before
+                           + n * static_cast<uint64_t>(done - done_before)))
             return r;
         r.runs          = static_cast<uint64_t>(done);
         const double m  = sum / done;
@@ -79,28 +82,67 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
     return r;
 }
 
+/// The photon counts tabulated: every n up to dense_photons, then spaced
+/// by node_ratio up to coarse_photons, then by coarse_ratio.
+std::vector<uint64_t> node_photons(const DevelopTable::Options& options)
+{
+    std::vector<uint64_t> nodes;
+    for (uint64_t n = 0; n <= std::min(options.max_photons, options.dense_photons); ++n)
+        nodes.push_back(n);
+    double next = static_cast<double>(nodes.back());
+    while (nodes.back() < options.max_photons) {
+        const double ratio = nodes.back() < options.coarse_photons ? options.node_ratio
+                                                                   : options.coarse_ratio;
+        next = std::max(next * ratio, static_cast<double>(nodes.back() + 1));
+        nodes.push_back(std::min(options.max_photons, static_cast<uint64_t>(std::ceil(next))));
+    }
+    return nodes;
+}
+
 }  // namespace
+
+double DevelopTable::predicted_steps(const Options& options, const KineticsRates& rates,
+                                     double shutter_s, const Development& dev)
+{
+    constexpr int kPilotRuns = 16;
+    const double target = options.target_standard_error;
+    double steps        = 0.0;
+    for (uint64_t n : node_photons(options)) {
+        if (n < 4)
+            continue;
+        double sum = 0.0, sum2 = 0.0;
+        uint64_t pilot_steps = 0;
+        for (int i = 0; i < kPilotRuns; ++i) {
+            Rng rng(hash_ids(options.stream_key, 0x9e55, n, static_cast<uint64_t>(i)),
+                    Stage::kinetics);
+            uint64_t events = 0;
+            const double s = dev.survival_probability(
+                simulate_latent_image(n, shutter_s, rates, rng, &events).n4);
+            sum += s;
+            sum2 += s * s;
+            pilot_steps += events + n;
+        }
+        const double m = sum / kPilotRuns;
+        const double v = std::max(0.0, sum2 / kPilotRuns - m * m);
+        // Runs until max(sqrt(v / runs), 1 / runs) <= target (estimate_node).
+        const double runs = std::min(static_cast<double>(options.max_samples),
+                                     std::ceil(std::max(v / (target * target), 1.0 / target)));
+        steps += runs * static_cast<double>(pilot_steps) / kPilotRuns;
+    }
+    return steps;
+}
 
 DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const Development& dev,
                            const Options& options)
-    : m_options(options)
+    : m_options(options), m_nodes_n(node_photons(options))
 {
-    for (uint64_t n = 0; n <= std::min(options.max_photons, options.dense_photons); ++n)
-        m_nodes_n.push_back(n);
-    double next = static_cast<double>(m_nodes_n.back());
-    while (m_nodes_n.back() < options.max_photons) {
-        const double ratio = m_nodes_n.back() < options.coarse_photons ? options.node_ratio
-                                                                       : options.coarse_ratio;
-        next = std::max(next * ratio, static_cast<double>(m_nodes_n.back() + 1));
-        m_nodes_n.push_back(std::min(options.max_photons, static_cast<uint64_t>(std::ceil(next))));
-    }
 
     // Nodes are independent: build them on worker threads, largest first
     // (they cost most), each into its own slot.
     std::vector<NodeResult> results(m_nodes_n.size());
     std::atomic<size_t> next_node { 0 };
     Budget budget;
-    budget.limit    = options.event_budget;
+    budget.limit    = options.step_budget;
     const auto work = [&]() {
         for (size_t k; !budget.exceeded && (k = next_node++) < m_nodes_n.size();) {
             const size_t i = m_nodes_n.size() - 1 - k;
@@ -117,8 +159,8 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
     for (auto& t : threads)
         t.join();
     if (budget.exceeded) {
-        m_complete     = false;
-        m_total_events = budget.spent;
+        m_complete    = false;
+        m_total_steps = budget.spent;
         return;
     }
 
@@ -130,6 +172,7 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
         m_max_se = std::max(m_max_se, r.se);
         m_total_runs += r.runs;
         m_total_events += r.events;
+        m_total_steps += r.events + r.runs * m_nodes_n[static_cast<size_t>(&r - results.data())];
     }
     // Interpolation error: only between sparse nodes (dense nodes are exact
     // integers, nothing is interpolated there).

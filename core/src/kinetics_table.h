@@ -39,11 +39,12 @@ public:
         uint64_t stream_key = 0;
         /// Worker threads for the build (0: all).
         int nthreads = 0;
-        /// Chain events the build may spend (0: no limit). A build that
-        /// would spend more stops early and is incomplete(): deterministic,
-        /// since it stops exactly when its full cost, total_events() of a
-        /// complete build, exceeds the budget, whatever the threads.
-        uint64_t event_budget = 0;
+        /// Chain steps (events + photon arrivals) the build may spend (0:
+        /// no limit). A build that would spend more stops early and is
+        /// incomplete(): deterministic, since it stops exactly when its
+        /// full cost, total_steps() of a complete build, exceeds the
+        /// budget, whatever the threads.
+        uint64_t step_budget = 0;
     };
 
     /// Builds the table. Deterministic for any thread count: each node's
@@ -51,6 +52,14 @@ public:
     /// chain steps.
     DevelopTable(const KineticsRates& rates, double shutter_s, const Development& dev,
                  const Options& options);
+
+    /// The chain steps (total_steps()) a build with these options is
+    /// predicted to spend, from a pilot of 16 runs per node (their own
+    /// streams): each node's runs until its standard error meets the
+    /// target, max(v / target^2, 1 / target), at the pilot's steps per run.
+    /// Deterministic; costs about 16 runs per node.
+    static double predicted_steps(const Options& options, const KineticsRates& rates,
+                                  double shutter_s, const Development& dev);
 
     /// P(develop | n) for n <= max_photons(): exact for n < 4 (fog only),
     /// the node's estimate at a node, linear interpolation between nodes.
@@ -79,6 +88,8 @@ public:
     size_t node_count() const { return m_nodes_n.size(); }
     uint64_t total_runs() const { return m_total_runs; }
     uint64_t total_events() const { return m_total_events; }
+    /// Chain steps of the build: events plus photon arrivals (its cost).
+    uint64_t total_steps() const { return m_total_steps; }
     /// False when the build ran out of its event budget: then the table
     /// must not be used (its nodes are unfinished).
     bool complete() const { return m_complete; }
@@ -91,7 +102,7 @@ private:
     std::vector<double> m_nodes_p;
     std::vector<double> m_nodes_se;
     double m_max_p = 0.0, m_min_p = 1.0, m_max_se = 0.0, m_max_interp = 0.0;
-    uint64_t m_total_runs = 0, m_total_events = 0;
+    uint64_t m_total_runs = 0, m_total_events = 0, m_total_steps = 0;
     bool m_complete = true;
 };
 

@@ -179,8 +179,9 @@ void grain_size_and_density_grid(const std::vector<Engine>& engines)
 // up to the largest photon count the scene could give whatever the number
 // of grains the table served: 10 um grains at 1 per um^2 on a 45 um frame
 // (1910 grains) took 45 s of table setup against 0.5 s for exact. Auto now
-// builds a table only when it costs fewer chain events than its grains
-// would, else runs the early-stopped chain.)
+// builds a table only when it is predicted to cost fewer chain steps than
+// the frame's grains would spend in the early-stopped chain, else runs
+// that chain.)
 TEST(StabilityRender, GrainSizesAndDensities) { grain_size_and_density_grid(render_engines()); }
 
 // Scans whose pixels are far larger than the grains (thumbnails of fine

@@ -102,10 +102,12 @@ TEST_P(UniformPatch, AgreesWithTheModelInDistribution)
     // density; in transmittance that is T ln(10) times it, and in the
     // developed fraction about bound / (0.434 n E[a]) (the density bias is
     // an area-weighted mean of the P errors).
-    if (c.engine == Engine::exact)
+    if (c.engine == Engine::exact) {
         EXPECT_EQ(r.error_estimate, 0.0);
-    if (c.table)
+    }
+    if (c.table) {
         EXPECT_GT(r.error_estimate, 0.0);
+    }
     const double n_mean_area = pop.grains_per_um2 * m.area_developed_um2.value
                                / std::max(1e-12, m.develop_fraction.value);
 
