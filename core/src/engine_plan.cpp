@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <sstream>
 #include <tuple>
@@ -59,11 +59,11 @@ RegionValues region_values(const LayerExposure& ex, const InputRegion& r)
 
 /// Chain steps (events and photon arrivals) per grain that the
 /// early-stopped chain (KineticsMethod::early_stop) spends on a population
-/// at the stock's grey exposure,
-/// estimated from a fixed pilot sample of grains: sizes from the
-/// population's distribution, photon counts, develop uniforms and chains as
-/// the render draws them. The cost the table would save; deterministic
-/// (seeded), and a property of the stock and the scene, not of the pixels.
+/// at the stock's grey exposure, estimated from a fixed pilot sample of 256
+/// grains: sizes from the population's distribution, photon counts, develop
+/// uniforms and chains drawn as the render draws them. The cost a table
+/// would save; deterministic (seeded), and a property of the stock and the
+/// scene, not of the pixels.
 double early_stop_steps_per_grain(const Population& pop, const KineticsRates& rates,
                                    double photons_per_um2, double shutter_s,
                                    const Development& dev, uint64_t key)
@@ -401,9 +401,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     // photon arrivals) than the frame's grains would spend in the
     // early-stopped chain, which decides most grains within a few steps:
     // otherwise that chain runs, with the exact engine's results and no
-    // error of its own.
-    // The decision depends on the table's full cost only, never on which
-    // tables earlier renders left in the cache, nor on the ROI.
+    // error of its own. The decision depends on seeded pilots and the
+    // table's full cost only, never on which tables earlier renders left in
+    // the cache, nor on the ROI.
     for (TableRequest& req : requests) {
         const auto t0 = std::chrono::steady_clock::now();
         // kinetics=table asked for explicitly: built whatever it costs.
