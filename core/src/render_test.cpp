@@ -95,8 +95,9 @@ TEST(Render, BitIdenticalForThreadsAndTiles)
             EXPECT_GT(sa.layers[l].grains, 0u);
             EXPECT_GT(sa.layers[l].developed, 0u);
             // The forced tables did run (they report an error bound).
-            if (settings.kinetics)
+            if (settings.kinetics) {
                 EXPECT_GT(sa.layers[l].error_estimate, 0.0) << name;
+            }
         }
         for (float v : a)
             EXPECT_TRUE(std::isfinite(v));
