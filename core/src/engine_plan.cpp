@@ -410,15 +410,17 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         // Otherwise only when predicted to cost less than the chains it
         // replaces, and stopped (deterministically) if it costs more than
         // twice that after all.
-        if (!settings.kinetics) {
-            if (DevelopTable::predicted_steps(req.options, req.rates, scene.shutter_s,
-                                              development)
-                > req.grain_steps)
-                continue;
-            req.options.step_budget
-                = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
+        const bool pays = settings.kinetics
+                          || DevelopTable::predicted_steps(req.options, req.rates,
+                                                           scene.shutter_s, development)
+                                 <= req.grain_steps;
+        if (pays) {
+            if (!settings.kinetics)
+                req.options.step_budget
+                    = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
+            req.table = cached_table(req.rates, scene.shutter_s, stock, req.options);
         }
-        req.table   = cached_table(req.rates, scene.shutter_s, stock, req.options);
+        // Setup time: the pilot, and the build when there is one.
         req.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     std::vector<bool> charged(requests.size(), false);
