@@ -18,10 +18,6 @@ struct NodeResult {
     uint64_t runs = 0, events = 0;
 };
 
-/// Runs the chain for n photons until the standard error of the mean
-/// survival is below the target. Each run contributes its survival
-/// probability (1 - f)(1 - d)^n4: a conditional expectation, with less
-/// variance than counting developed grains.
 /// Chain steps spent by a build so far, against its budget (Options).
 struct Budget {
     uint64_t limit = 0;  ///< 0: none
@@ -36,6 +32,10 @@ struct Budget {
     }
 };
 
+/// Runs the chain for n photons until the standard error of the mean
+/// survival is below the target. Each run contributes its survival
+/// probability (1 - f)(1 - d)^n4: a conditional expectation, with less
+/// variance than counting developed grains.
 NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_s,
                          const Development& dev, const DevelopTable::Options& o, Budget& budget)
 {
@@ -136,7 +136,6 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
                            const Options& options)
     : m_options(options), m_nodes_n(node_photons(options))
 {
-
     // Nodes are independent: build them on worker threads, largest first
     // (they cost most), each into its own slot.
     std::vector<NodeResult> results(m_nodes_n.size());

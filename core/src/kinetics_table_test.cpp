@@ -54,5 +54,39 @@ TEST(DevelopTable, DeterministicForAnyThreadCount)
         ASSERT_EQ(a.probability(n), b.probability(n)) << n;
 }
 
+TEST(DevelopTable, StepBudgetStopsExactlyWhenTheFullCostExceedsIt)
+{
+    // A build stops (incomplete) iff its full cost exceeds the budget,
+    // whatever the thread count; within the budget it is the unlimited
+    // build, value for value.
+    Stock stock;
+    const Development dev(stock);
+    const KineticsRates rates { 1e7, 1e6, 10 };
+    DevelopTable::Options o;
+    o.max_photons           = 200;
+    o.target_standard_error = 5e-3;
+    const DevelopTable full(rates, 0.02, dev, o);
+    ASSERT_TRUE(full.complete());
+    const uint64_t cost = full.total_steps();
+    ASSERT_GT(cost, full.total_events());  // arrivals count too
+    for (int threads : { 1, 3 }) {
+        o.nthreads    = threads;
+        o.step_budget = cost;
+        const DevelopTable enough(rates, 0.02, dev, o);
+        EXPECT_TRUE(enough.complete()) << threads;
+        EXPECT_EQ(enough.total_steps(), cost);
+        for (uint64_t n = 0; n <= 200; ++n)
+            ASSERT_EQ(enough.probability(n), full.probability(n)) << n;
+        o.step_budget = cost - 1;
+        EXPECT_FALSE(DevelopTable(rates, 0.02, dev, o).complete()) << threads;
+    }
+    // The pilot's prediction of that cost: within a factor of two here
+    // (16 runs per node estimate each node's variance and steps per run).
+    o.step_budget          = 0;
+    const double predicted = DevelopTable::predicted_steps(o, rates, 0.02, dev);
+    EXPECT_GT(predicted, 0.5 * static_cast<double>(cost));
+    EXPECT_LT(predicted, 2.0 * static_cast<double>(cost));
+}
+
 }  // namespace
 }  // namespace filmgrain
