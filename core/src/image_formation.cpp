@@ -11,6 +11,23 @@ namespace filmgrain {
 
 namespace {
 
+/// Calls f(a, b) for each interval of the union of the intervals
+/// [first, last) (pairs (a, b), sorted by a, non-empty range), in order.
+template<typename It, typename F> void for_each_union_interval(It first, It last, F&& f)
+{
+    double a = first->first, b = first->second;
+    for (auto it = first + 1; it != last; ++it) {
+        if (it->first <= b) {
+            b = std::max(b, it->second);
+        } else {
+            f(a, b);
+            a = it->first;
+            b = it->second;
+        }
+    }
+    f(a, b);
+}
+
 constexpr double kTwoPi = 2.0 * M_PI;
 
 /// Angular intervals on one circle, in [0, 2 pi).
@@ -252,17 +269,7 @@ void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, i
                 row[i - x0] += (std::min(b, pb) - std::max(a, pa)) * weight;
             }
         };
-        double a = first->first, b = first->second;
-        for (auto it = first + 1; it != last; ++it) {
-            if (it->first <= b) {
-                b = std::max(b, it->second);
-            } else {
-                deposit(a, b);
-                a = it->first;
-                b = it->second;
-            }
-        }
-        deposit(a, b);
+        for_each_union_interval(first, last, deposit);
     }
     for (int64_t i = 0; i < tw * th; ++i)
         fraction[i] = std::min(fraction[i], 1.0);
@@ -555,17 +562,7 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
                 area[at] += factor * len;
             }
         };
-        double a = first->first, b = first->second;
-        for (auto it = first + 1; it != last; ++it) {
-            if (it->first <= b) {
-                b = std::max(b, it->second);
-            } else {
-                deposit(a, b);
-                a = it->first;
-                b = it->second;
-            }
-        }
-        deposit(a, b);
+        for_each_union_interval(first, last, deposit);
     }
 
     const double pixel_um2 = px_um * py_um;
