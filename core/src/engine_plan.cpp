@@ -89,34 +89,6 @@ double early_stop_steps_per_grain(const Population& pop, const KineticsRates& ra
     return static_cast<double>(steps) / kPilotGrains;
 }
 
-/// Poisson pmf over [n0, n1] by recurrence from the mode (no lgamma per
-/// term), calling f(n, p).
-template<typename F> void poisson_terms(double lambda, uint64_t n0, uint64_t n1, F&& f)
-{
-    if (lambda <= 0.0) {
-        if (n0 == 0)
-            f(0, 1.0);
-        return;
-    }
-    const uint64_t mode = std::clamp<uint64_t>(static_cast<uint64_t>(lambda), n0, n1);
-    const double pm     = std::exp(static_cast<double>(mode) * std::log(lambda) - lambda
-                                   - std::lgamma(static_cast<double>(mode) + 1.0));
-    double p = pm;
-    for (uint64_t n = mode;; --n) {
-        f(n, p);
-        if (n == n0 || p < 1e-300)
-            break;
-        p *= static_cast<double>(n) / lambda;
-    }
-    p = pm;
-    for (uint64_t n = mode + 1; n <= n1; ++n) {
-        p *= lambda / static_cast<double>(n);
-        if (p < 1e-300)
-            break;
-        f(n, p);
-    }
-}
-
 /// Bound on the bias of a patch-mean density caused by a population's
 /// table, over uniform exposures up to `photons_per_um2_max`. A patch's
 /// density is D = 0.434 n E[a P(N)] (MODEL.md 5), so a table error e(N)
@@ -148,7 +120,7 @@ double table_density_error(const Population& pop, const DevelopTable& table,
                                                    static_cast<uint64_t>(lam + sp));
             if (n0 > n1)
                 continue;
-            poisson_terms(lam, n0, n1, [&](uint64_t n, double p) {
+            for_each_poisson_term(lam, n0, n1, [&](uint64_t n, double p) {
                 w[static_cast<size_t>(n)] += pdf * a * p;
                 if (!table.is_node(n))
                     interp += pdf * a * p * table.max_interpolation_error();
@@ -200,6 +172,23 @@ std::shared_ptr<const DevelopTable> cached_table(const KineticsRates& rates, dou
         cache.erase(cache.begin());
     cache.emplace_back(key, table);
     return table;
+}
+
+/// Rows of raster coverage per pixel (its points across a pixel are 64):
+/// enough rows across the smallest mean grain radius for the tolerance, or
+/// 0 when more than 256 would be needed (grains far below the pixel: exact
+/// coverage then). The per-pixel sampling noise biases the mean of pixel
+/// densities (the log is convex), most where few points are uncovered.
+/// Measured on the colour wedge (6.25 um pixels, docs/performance): the
+/// largest step bias falls as (rows per radius)^-2.3 and is 0.0009 at 16
+/// rows per radius; rows are chosen to keep it below half the tolerance:
+/// rows per radius = (1.04 / tolerance)^(1 / 2.3), 15 at 0.002. The fast
+/// engine takes 4 rows per radius, whatever the bias (~0.05 at D = 2).
+int raster_samples(double pitch_um, double smallest_radius_um, double tolerance, bool fast)
+{
+    const double rows_per_radius = fast ? 4.0 : std::pow(1.04 / tolerance, 1.0 / 2.3);
+    const double want = std::ceil(rows_per_radius * pitch_um / smallest_radius_um);
+    return want > 256.0 ? 0 : static_cast<int>(std::max(want, 1.0));
 }
 
 std::string format_g(double v)
@@ -262,7 +251,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const Layer& layer = stock.layers[l];
         LayerPlan plan { LayerExposure(input, layer.sensitivity, frame.input_pitch_um),
-                         {}, CoverageMethod::exact, 0, "", "", 0.0, 0.0 };
+                         {}, CoverageMethod::exact, 0, 0.0, "", "", 0.0, 0.0 };
         double margin_um = 0.0, n_mean_area = 0.0, smallest_radius_um = 1e300;
         for (size_t p = 0; p < layer.populations.size(); ++p) {
             const Population& pop = layer.populations[p];
@@ -273,12 +262,13 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                                 pop.rate_area_exponent,
                                 KineticsMethod::chain,
                                 ExposureMethod::disc,
-                                nullptr };
+                                nullptr, nullptr, nullptr };
             margin_um = std::max(margin_um, pp.grains.max_radius_um());
             n_mean_area += pop.grains_per_um2 * pp.grains.mean_area_um2();
             smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
             plan.populations.push_back(std::move(pp));
         }
+        plan.margin_um = margin_um;
         // Exposure (MODEL.md 2).
         ExposureMethod exposure = fast ? ExposureMethod::centre : ExposureMethod::disc;
         if (settings.exposure_method)
@@ -326,6 +316,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 continue;
             }
             KineticsMethod want = settings.kinetics ? *settings.kinetics : KineticsMethod::table;
+            // The curve is built from the table: both ask for one.
+            if (want == KineticsMethod::curve)
+                want = KineticsMethod::table;
             if (want == KineticsMethod::table && pop.rate_area_exponent != 0.0) {
                 want = KineticsMethod::early_stop;
                 why << "population " << p
@@ -424,6 +417,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         req.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     std::vector<bool> charged(requests.size(), false);
+    std::vector<std::shared_ptr<const DevelopCurve>> curves(requests.size());
     for (const Need& need : needs) {
         LayerPlan& plan        = out[need.layer];
         PopulationPlan& pp     = plan.populations[need.population];
@@ -444,17 +438,58 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             continue;
         }
         pp.table = rq.table;
-        plan.error_estimate += table_density_error(
-            stock.layers[need.layer].populations[need.population], *pp.table,
-            need.photons_per_um2_max);
+        const Population& pop = stock.layers[need.layer].populations[need.population];
+        plan.error_estimate += table_density_error(pop, *pp.table, need.photons_per_um2_max);
+        // The fast per-grain kernel (P(develop | mean photons), one uniform
+        // per grain) wherever a table is built, unless the table itself
+        // was asked for.
+        if (!settings.kinetics || *settings.kinetics == KineticsMethod::curve) {
+            if (!curves[need.request])
+                curves[need.request] = std::make_shared<const DevelopCurve>(*pp.table);
+            pp.kinetics = KineticsMethod::curve;
+            pp.curve    = curves[need.request];
+            pp.fast     = std::make_shared<const FastGrains>(pp.grains);
+            if (!settings.exposure_method)
+                pp.exposure = ExposureMethod::centre;
+            // A curve error e moves a patch density by at most 0.434 n E[a] e.
+            plan.error_estimate += kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
+                                   * pp.curve->max_interpolation_error();
+        }
         std::ostringstream why;
         why << "population " << need.population << ": P(develop|N) tabulated for N <= "
             << pp.table->max_photons() << " (table " << need.request << ": "
             << pp.table->node_count() << " nodes, " << pp.table->total_runs()
             << " chain runs, largest node error " << format_g(pp.table->max_standard_error())
             << ", interpolation " << format_g(pp.table->max_interpolation_error()) << ")"
-            << (need.capped ? "; brighter grains run the chain" : "") << "; ";
+            << (need.capped ? "; brighter grains run the chain" : "");
+        if (pp.curve)
+            why << "; folded into P(develop|mean photons) for means <= "
+                << format_g(pp.curve->lambda_max()) << " (" << pp.curve->node_count()
+                << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
+                << "; radii from tabulated quantiles: relative error of the mean area "
+                << format_g(pp.fast->mean_area_relative_error()) << ")";
+        why << "; ";
         plan.reason += why.str();
+    }
+
+    // Coverage of the layers whose grains all run the fast kernel (and of
+    // every layer of the fast engine): raster where its sampling resolves
+    // the grains, else what the engine had.
+    for (size_t l = 0; l < out.size() && !exact; ++l) {
+        LayerPlan& plan = out[l];
+        double smallest_radius_um = 1e300;
+        for (const Population& pop : stock.layers[l].populations)
+            smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
+        const int samples = raster_samples(std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
+                                           smallest_radius_um, settings.tolerance, fast);
+        const bool kernel = std::all_of(plan.populations.begin(), plan.populations.end(),
+                                        [](const PopulationPlan& p) { return p.fast != nullptr; });
+        if (!settings.coverage && (kernel || fast) && samples > 0)
+            plan.coverage = CoverageMethod::raster;
+        if (plan.coverage != CoverageMethod::raster)
+            continue;
+        plan.coverage_samples = settings.coverage_samples > 0 ? settings.coverage_samples
+                                                              : (samples > 0 ? samples : 256);
     }
 
     for (LayerPlan& plan : out) {
@@ -465,7 +500,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         const ExposureMethod exposure = plan.populations.front().exposure;
         path << " exposure=" << exposure_method_name(exposure)
              << " coverage=" << coverage_method_name(plan.coverage);
-        if (plan.coverage == CoverageMethod::scanline)
+        if (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster)
             path << ":" << plan.coverage_samples;
         plan.path = path.str();
         if (exact) {
@@ -478,6 +513,10 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 why << "coverage on " << plan.coverage_samples
                     << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "
                        "per pixel); ";
+            if (plan.coverage == CoverageMethod::raster)
+                why << "coverage at " << plan.coverage_samples << "x" << plan.coverage_samples
+                    << " points per pixel (unbiased in the mean transmittance, noisy per pixel: "
+                       "measured in docs/performance); ";
             why << "error estimate = patch-mean density bias bound at 2 sigma from the tables";
         }
         plan.reason += why.str();

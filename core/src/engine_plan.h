@@ -8,9 +8,11 @@
 #include <vector>
 
 #include "development.h"
+#include "develop_curve.h"
 #include "exposure.h"
 #include "filmgrain/render.h"
 #include "geometry.h"
+#include "grain_kernel.h"
 #include "kinetics.h"
 #include "kinetics_table.h"
 
@@ -26,8 +28,13 @@ struct PopulationPlan {
     double rate_area_exponent = 0.0;
     KineticsMethod kinetics   = KineticsMethod::chain;
     ExposureMethod exposure   = ExposureMethod::disc;
-    /// For KineticsMethod::table; grains beyond its range use early_stop.
+    /// For KineticsMethod::table and curve; grains beyond its range use
+    /// early_stop.
     std::shared_ptr<const DevelopTable> table;
+    /// For KineticsMethod::curve: P(develop | mean photons) from `table`,
+    /// and the fast generator of the population's grains.
+    std::shared_ptr<const DevelopCurve> curve;
+    std::shared_ptr<const FastGrains> fast;
 };
 
 /// Everything a tile needs about one layer.
@@ -36,6 +43,9 @@ struct LayerPlan {
     std::vector<PopulationPlan> populations;
     CoverageMethod coverage = CoverageMethod::exact;
     int coverage_samples    = 0;
+    /// Largest grain radius of the layer: how far beyond a tile its grains'
+    /// centres (and so the exposure they read) may lie.
+    double margin_um = 0.0;
     /// For the statistics: what runs, why, its error bound, setup time.
     std::string path;
     std::string reason;

@@ -67,9 +67,8 @@ PopulationGrains::PopulationGrains(const Population& pop, uint64_t seed, uint32_
     m_key            = hash_ids(seed, layer_index, population_index);
     const double lam = pop.grains_per_um2;
 
-    const auto radius_at = [&](double z) { return 0.5 * std::exp(m_log_median_um + s * z); };
     const auto add_bin   = [&](double z_lo, double z_hi, double probability) {
-        m_bins.push_back(Bin { z_lo, z_hi, lam * probability, radius_at(z_hi),
+        m_bins.push_back(Bin { z_lo, z_hi, lam * probability, radius_at_z_um(z_hi),
                                std::sqrt(kGrainsPerCell / (lam * probability)),
                                TruncatedNormal(z_lo, z_hi) });
     };
@@ -101,8 +100,7 @@ void PopulationGrains::cell_grains(size_t bin_index, int64_t cx, int64_t cy,
                                    std::vector<Grain>& out) const
 {
     const Bin& bin         = m_bins[bin_index];
-    const uint64_t cell_id = hash_ids(m_key, bin_index, static_cast<uint64_t>(cx),
-                                      static_cast<uint64_t>(cy));
+    const uint64_t cell_id = this->cell_id(bin_index, cx, cy);
     Rng rng(cell_id, Stage::cell);
     const uint64_t count = sample_poisson(bin.grains_per_um2 * bin.cell_um * bin.cell_um, rng);
     for (uint64_t i = 0; i < count; ++i) {
@@ -111,7 +109,7 @@ void PopulationGrains::cell_grains(size_t bin_index, int64_t cx, int64_t cy,
         g.y_um = (static_cast<double>(cy) + rng.uniform()) * bin.cell_um;
         const double z
             = m_log_sigma > 0.0 ? bin.z.sample(rng.uniform()) : 0.0;
-        g.radius_um = 0.5 * std::exp(m_log_median_um + m_log_sigma * z);
+        g.radius_um = radius_at_z_um(z);
         g.id        = hash_combine(cell_id, i);
         out.push_back(g);
     }

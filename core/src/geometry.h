@@ -8,6 +8,7 @@
 
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
+#include "rng.h"
 #include "sampling.h"
 
 namespace filmgrain {
@@ -84,6 +85,20 @@ public:
     /// The visitor decides what touches.
     template<typename Visit> void for_each_grain_near(const RectUm& rect, Visit&& visit) const;
 
+    /// Calls visit(bin, cx, cy) for every cell whose grains may reach
+    /// `rect` (centres within the bin's largest radius of it), in the order
+    /// of for_each_grain_near. Engines that generate a cell's grains their
+    /// own way use this and cell_id().
+    template<typename Visit> void for_each_cell_near(const RectUm& rect, Visit&& visit) const;
+
+    /// The identity of a cell, keying its random streams.
+    uint64_t cell_id(size_t bin, int64_t cx, int64_t cy) const
+    {
+        return hash_ids(m_key, bin, static_cast<uint64_t>(cx), static_cast<uint64_t>(cy));
+    }
+    /// Disc radius at normal score z of ln d, micrometres.
+    double radius_at_z_um(double z) const { return 0.5 * std::exp(m_log_median_um + m_log_sigma * z); }
+
     /// The bins, for tests and diagnostics.
     struct Bin {
         double z_lo;            ///< lower bound of z (exclusive; -inf for bin 0)
@@ -107,9 +122,8 @@ private:
 };
 
 template<typename Visit>
-void PopulationGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+void PopulationGrains::for_each_cell_near(const RectUm& rect, Visit&& visit) const
 {
-    std::vector<Grain> grains;
     for (size_t b = 0; b < m_bins.size(); ++b) {
         const Bin& bin   = m_bins[b];
         const double pad = bin.max_radius_um;
@@ -119,13 +133,21 @@ void PopulationGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) co
         const int64_t cx0 = cell(rect.x0_um - pad), cx1 = cell(rect.x1_um + pad);
         const int64_t cy0 = cell(rect.y0_um - pad), cy1 = cell(rect.y1_um + pad);
         for (int64_t cy = cy0; cy <= cy1; ++cy)
-            for (int64_t cx = cx0; cx <= cx1; ++cx) {
-                grains.clear();
-                cell_grains(b, cx, cy, grains);
-                for (const Grain& g : grains)
-                    visit(g);
-            }
+            for (int64_t cx = cx0; cx <= cx1; ++cx)
+                visit(b, cx, cy);
     }
+}
+
+template<typename Visit>
+void PopulationGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+{
+    std::vector<Grain> grains;
+    for_each_cell_near(rect, [&](size_t b, int64_t cx, int64_t cy) {
+        grains.clear();
+        cell_grains(b, cx, cy, grains);
+        for (const Grain& g : grains)
+            visit(g);
+    });
 }
 
 }  // namespace filmgrain

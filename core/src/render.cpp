@@ -16,6 +16,7 @@
 #include "engine_plan.h"
 #include "exposure.h"
 #include "geometry.h"
+#include "grain_kernel.h"
 #include "image_formation.h"
 #include "kinetics.h"
 #include "rng.h"
@@ -50,6 +51,7 @@ const char* kinetics_method_name(KineticsMethod method)
     case KineticsMethod::chain: return "chain";
     case KineticsMethod::early_stop: return "early";
     case KineticsMethod::table: return "table";
+    case KineticsMethod::curve: return "curve";
     }
     return "unknown";
 }
@@ -61,7 +63,12 @@ const char* exposure_method_name(ExposureMethod method)
 
 const char* coverage_method_name(CoverageMethod method)
 {
-    return method == CoverageMethod::exact ? "exact" : "scanline";
+    switch (method) {
+    case CoverageMethod::exact: return "exact";
+    case CoverageMethod::scanline: return "scanline";
+    case CoverageMethod::raster: return "raster";
+    }
+    return "unknown";
 }
 
 std::vector<std::string> engine_names() { return { "auto", "exact", "fast" }; }
@@ -90,8 +97,8 @@ bool parse_engine(const std::string& name, Engine& out)
 
 bool parse_kinetics_method(const std::string& name, KineticsMethod& out)
 {
-    constexpr KineticsMethod all[]
-        = { KineticsMethod::chain, KineticsMethod::early_stop, KineticsMethod::table };
+    constexpr KineticsMethod all[] = { KineticsMethod::chain, KineticsMethod::early_stop,
+                                       KineticsMethod::table, KineticsMethod::curve };
     return parse_by_name(name, all, kinetics_method_name, out);
 }
 
@@ -103,7 +110,8 @@ bool parse_exposure_method(const std::string& name, ExposureMethod& out)
 
 bool parse_coverage_method(const std::string& name, CoverageMethod& out)
 {
-    constexpr CoverageMethod all[] = { CoverageMethod::exact, CoverageMethod::scanline };
+    constexpr CoverageMethod all[]
+        = { CoverageMethod::exact, CoverageMethod::scanline, CoverageMethod::raster };
     return parse_by_name(name, all, coverage_method_name, out);
 }
 
@@ -155,6 +163,8 @@ struct TileScratch {
     std::vector<double> fraction;
     GridCoverageScratch grid;
     ScanlineScratch scanline;
+    RasterScratch raster;
+    ExposurePlane plane;
 };
 
 /// What happened to one grain.
@@ -190,7 +200,31 @@ public:
             const LayerPlan& layer = m_layers[l];
             scratch.discs.clear();
             uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
+            bool plane_filled = false;
             for (const PopulationPlan& pop : layer.populations) {
+                if (pop.fast) {
+                    if (pop.exposure == ExposureMethod::centre && !plane_filled) {
+                        const double m = layer.margin_um;
+                        scratch.plane.fill(layer.exposure, m_frame,
+                                           { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
+                                             rect.y1_um + m });
+                        plane_filled = true;
+                    }
+                    FastCounts c;
+                    if (pop.exposure == ExposureMethod::centre)
+                        develop_fast(pop, rect, scratch.discs, c, [&](double x, double y, double r) {
+                            return scratch.plane.at(x, y) * r * r * M_PI;
+                        });
+                    else
+                        develop_fast(pop, rect, scratch.discs, c, [&](double x, double y, double r) {
+                            return layer.exposure.integrate_over_disc(x, y, r);
+                        });
+                    grains += c.grains;
+                    developed += c.developed;
+                    photons += c.photons;
+                    events += c.events;
+                    continue;
+                }
                 pop.grains.for_each_grain_near(rect, [&](const Grain& g) {
                     const Disc disc { g.x_um, g.y_um, g.radius_um };
                     if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
@@ -215,10 +249,7 @@ public:
             c.photons += photons;
             c.events += events;
             c.decided_early += early;
-            if (layer.coverage == CoverageMethod::exact)
-                write_exact_densities(scratch, l, x0, y0, x1, y1);
-            else
-                write_scanline_densities(scratch, l, x0, y0, x1, y1);
+            write_densities(scratch, l, x0, y0, x1, y1);
         }
     }
 
@@ -268,6 +299,54 @@ private:
                  pop.rates.k_loss_per_s * scale };
     }
 
+    /// Counters of the fast kernel for one population and tile.
+    struct FastCounts {
+        uint64_t grains = 0, developed = 0, photons = 0, events = 0;
+    };
+
+    /// MODEL.md 1-4 for the grains of a population near a tile, by the fast
+    /// per-grain kernel (grain_kernel.h): one uniform per grain against
+    /// P(develop | mean photons). `integral(x, y, r)` is the exposure value
+    /// integrated over the disc (value x um^2), chosen once per population.
+    /// Developed discs that touch the tile are appended to `discs`.
+    template<typename Integral>
+    void develop_fast(const PopulationPlan& pop, const RectUm& rect, std::vector<Disc>& discs,
+                      FastCounts& c, Integral&& integral) const
+    {
+        const DevelopCurve& curve = *pop.curve;
+        const double lambda_max   = curve.lambda_max();
+        const double k            = pop.photons_per_value_um2;
+        pop.fast->for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits,
+                                                uint64_t id) {
+            const Disc disc { x, y, r };
+            if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
+                return;
+            const double lambda = k * integral(x, y, r);
+            // u in (0, 1); develops iff u >= 1 - P, as Development::develops.
+            const double u = (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
+            bool developed;
+            GrainOutcome o;  // photons and events: only beyond the curve
+            if (lambda <= lambda_max) {
+                developed = u >= 1.0 - curve.probability(lambda);
+            } else {
+                // Beyond the curve (blown highlights): the photon count, then
+                // the table or the chain, as the table path does.
+                Grain g { x, y, r, id };
+                o = decide_from_mean(pop, g, lambda, u);
+                developed = o.developed;
+            }
+            // Count each grain once: in the tile holding its centre.
+            if (x >= rect.x0_um && x < rect.x1_um && y >= rect.y0_um && y < rect.y1_um) {
+                ++c.grains;
+                c.developed += developed;
+                c.photons += o.photons;
+                c.events += o.events;
+            }
+            if (developed)
+                discs.push_back(disc);
+        });
+    }
+
     /// MODEL.md 2-4 for one grain: absorbed photons, latent image,
     /// development, by the population's methods. Every random value comes
     /// from the grain's own streams, one per stage.
@@ -295,16 +374,26 @@ private:
         // Both faster paths first ask whether u alone decides: every grain
         // develops with probability at least f (the fog), i.e. whenever
         // u >= 1 - f, whatever its photons.
+        return decide_from_mean(pop, g, photon_mean(layer, pop, g), u);
+    }
+
+    /// The faster paths of MODEL.md 2-4 for a grain with mean absorbed
+    /// photons `mean` and develop uniform u: whether u alone decides, else
+    /// the photon count, then the table or the chain until decided.
+    GrainOutcome decide_from_mean(const PopulationPlan& pop, const Grain& g, double mean,
+                                  double u) const
+    {
+        GrainOutcome o;
         const uint64_t needed = m_development.n4_needed(u);
         if (needed == 0) {
             o.developed = o.decided_early = true;
             return o;
         }
         Rng photon_rng(g.id, Stage::photons);
-        o.photons = sample_poisson(photon_mean(layer, pop, g), photon_rng);
+        o.photons = sample_poisson(mean, photon_rng);
         if (o.photons < 4 || needed == std::numeric_limits<uint64_t>::max())
             return o;  // no 4-centre can form, or none would suffice
-        if (pop.kinetics == KineticsMethod::table && o.photons <= pop.table->max_photons()) {
+        if (pop.table && o.photons <= pop.table->max_photons()) {
             o.developed = u >= 1.0 - pop.table->probability(o.photons);
             return o;
         }
@@ -326,35 +415,35 @@ private:
             1.0 - covered_fraction, m_stock.max_density, m_stock.base_density));
     }
 
-    /// MODEL.md 5, exact: the area of each pixel covered by the union of
-    /// the developed discs (grid_coverage, equal to union_coverage_um2 of
-    /// every pixel to rounding).
-    void write_exact_densities(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0,
-                               int64_t x1, int64_t y1) const
+    /// MODEL.md 5: the covered fraction of each pixel of the tile by the
+    /// layer's coverage method, then densities. exact: the area covered by
+    /// the union of the developed discs (grid_coverage, equal to
+    /// union_coverage_um2 of every pixel to rounding); scanline and raster:
+    /// sampled (image_formation.h).
+    void write_densities(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0, int64_t x1,
+                         int64_t y1) const
     {
         const int64_t tw = x1 - x0, th = y1 - y0;
+        const LayerPlan& plan = m_layers[layer];
+        const double px = m_frame.scan_pitch_x_um, py = m_frame.scan_pitch_y_um;
         scratch.fraction.resize(static_cast<size_t>(tw * th));
-        grid_coverage(scratch.discs, x0, y0, x1, y1, m_frame.scan_pitch_x_um,
-                      m_frame.scan_pitch_y_um, scratch.grid, scratch.fraction.data());
+        double* fraction = scratch.fraction.data();
+        switch (plan.coverage) {
+        case CoverageMethod::exact:
+            grid_coverage(scratch.discs, x0, y0, x1, y1, px, py, scratch.grid, fraction);
+            break;
+        case CoverageMethod::scanline:
+            scanline_coverage(scratch.discs, x0, y0, x1, y1, px, py, plan.coverage_samples,
+                              scratch.scanline, fraction);
+            break;
+        case CoverageMethod::raster:
+            raster_coverage(scratch.discs, x0, y0, x1, y1, px, py, plan.coverage_samples,
+                            scratch.raster, fraction);
+            break;
+        }
         for (int64_t iy = y0; iy < y1; ++iy)
             for (int64_t ix = x0; ix < x1; ++ix)
-                store_density(layer, ix, iy,
-                              scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
-    }
-
-    /// MODEL.md 5 on sub-scanlines (CoverageMethod::scanline).
-    void write_scanline_densities(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0,
-                                  int64_t x1, int64_t y1) const
-    {
-        const int64_t tw = x1 - x0, th = y1 - y0;
-        scratch.fraction.resize(static_cast<size_t>(tw * th));
-        scanline_coverage(scratch.discs, x0, y0, x1, y1, m_frame.scan_pitch_x_um,
-                          m_frame.scan_pitch_y_um, m_layers[layer].coverage_samples,
-                          scratch.scanline, scratch.fraction.data());
-        for (int64_t iy = y0; iy < y1; ++iy)
-            for (int64_t ix = x0; ix < x1; ++ix)
-                store_density(layer, ix, iy,
-                              scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
+                store_density(layer, ix, iy, fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
     }
 
     const Stock& m_stock;

@@ -59,17 +59,28 @@ bool bit_identical(const std::vector<float>& a, const std::vector<float>& b)
 /// determinism guarantee holds for each.
 std::vector<std::pair<const char*, RenderSettings>> engine_variants()
 {
-    RenderSettings exact, automatic, auto_table, fast_table;
+    RenderSettings exact, automatic, auto_table, fast_table, auto_kernel, fast_kernel,
+        kernel_exact_coverage;
     exact.engine      = Engine::exact;
     automatic.engine  = Engine::automatic;
     auto_table.engine = Engine::automatic;
     auto_table.kinetics = KineticsMethod::table;
     fast_table.engine   = Engine::fast;
     fast_table.kinetics = KineticsMethod::table;
+    // The fast per-grain kernel, with each of its coverages.
+    auto_kernel.engine                = Engine::automatic;
+    auto_kernel.kinetics              = KineticsMethod::curve;
+    fast_kernel.engine                = Engine::fast;
+    fast_kernel.kinetics              = KineticsMethod::curve;
+    kernel_exact_coverage             = auto_kernel;
+    kernel_exact_coverage.coverage    = CoverageMethod::exact;
     return { { "exact", exact },
              { "auto", automatic },
              { "auto kinetics=table", auto_table },
-             { "fast kinetics=table", fast_table } };
+             { "fast kinetics=table", fast_table },
+             { "auto kinetics=curve", auto_kernel },
+             { "fast kinetics=curve", fast_kernel },
+             { "auto kinetics=curve coverage=exact", kernel_exact_coverage } };
 }
 
 TEST(Render, BitIdenticalForThreadsAndTiles)

@@ -36,6 +36,18 @@ template<typename... T> inline constexpr uint64_t hash_ids(uint64_t first, T... 
     return h;
 }
 
+/// Word k of a counter-based stream keyed by `key`: SplitMix64 (Steele,
+/// Lea and Flood 2014) at position k, i.e. the key advanced k + 1 steps of
+/// the golden-ratio increment, then mixed. For kernels that draw a fixed
+/// number of values per item in a tight loop: no state, no seeding cost.
+inline constexpr uint64_t counter_u64(uint64_t key, uint64_t k)
+{
+    uint64_t z = key + (k + 1) * 0x9e3779b97f4a7c15ULL;
+    z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
 /// Stages of a grain's life; each draws from its own stream so that a fast
 /// path that skips one stage does not shift the random numbers of another.
 enum class Stage : uint64_t {
@@ -43,6 +55,8 @@ enum class Stage : uint64_t {
     photons     = 2,  ///< absorbed photon count (MODEL.md 2)
     kinetics    = 3,  ///< arrival times and latent-image events (MODEL.md 3)
     development = 4,  ///< develop or not (MODEL.md 4)
+    fast_cell   = 5,  ///< grain count of a cell in the fast kernel (its
+                      ///< grains then use counter_u64 of the cell's id)
 };
 
 /// A PCG32 stream for one (identity, stage). Not thread-safe: one per use.

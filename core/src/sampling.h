@@ -4,6 +4,8 @@
 // rejection samplers take an Rng because they consume a variable number.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "rng.h"
@@ -46,5 +48,33 @@ double sample_truncated_normal(double z_lo, double z_hi, double u);
 /// 2^63 or more, +inf included, saturate at UINT64_MAX. Never decreasing in
 /// the mean's range for a fixed stream, never 0 for a huge mean.
 uint64_t sample_poisson(double mean, Rng& rng);
+
+/// The Poisson(lambda) pmf over [n0, n1] by recurrence from the mode (one
+/// lgamma in all), calling f(n, p) for each n whose p is above 1e-300.
+template<typename F> void for_each_poisson_term(double lambda, uint64_t n0, uint64_t n1, F&& f)
+{
+    if (lambda <= 0.0) {
+        if (n0 == 0)
+            f(0, 1.0);
+        return;
+    }
+    const uint64_t mode = std::clamp<uint64_t>(static_cast<uint64_t>(lambda), n0, n1);
+    const double pm     = std::exp(static_cast<double>(mode) * std::log(lambda) - lambda
+                                   - std::lgamma(static_cast<double>(mode) + 1.0));
+    double p = pm;
+    for (uint64_t n = mode;; --n) {
+        f(n, p);
+        if (n == n0 || p < 1e-300)
+            break;
+        p *= static_cast<double>(n) / lambda;
+    }
+    p = pm;
+    for (uint64_t n = mode + 1; n <= n1; ++n) {
+        p *= lambda / static_cast<double>(n);
+        if (p < 1e-300)
+            break;
+        f(n, p);
+    }
+}
 
 }  // namespace filmgrain

@@ -274,10 +274,11 @@ std::string names_of(const E (&all)[N], const char* (*to_name)(E))
     return s;
 }
 
-constexpr KineticsMethod kKinetics[]
-    = { KineticsMethod::chain, KineticsMethod::early_stop, KineticsMethod::table };
+constexpr KineticsMethod kKinetics[] = { KineticsMethod::chain, KineticsMethod::early_stop,
+                                        KineticsMethod::table, KineticsMethod::curve };
 constexpr ExposureMethod kExposureMethods[] = { ExposureMethod::disc, ExposureMethod::centre };
-constexpr CoverageMethod kCoverage[] = { CoverageMethod::exact, CoverageMethod::scanline };
+constexpr CoverageMethod kCoverage[]
+    = { CoverageMethod::exact, CoverageMethod::scanline, CoverageMethod::raster };
 
 bool parse_kinetics_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
@@ -386,21 +387,32 @@ const Modifier kModifiers[] = {
       parse_engine_value },
     { "tolerance", "D", "density error budget of the approximate paths (auto), (0, 1]",
       [](const FilmgrainCommand& d) { return format_number(d.tolerance); }, parse_tolerance },
-    { "kinetics", "chain|early|table",
+    { "kinetics", "chain|early|table|curve",
       "expert override (not with engine=exact): chain = every event; early = the chain until "
-      "the grain's fate is decided (exact); table = P(develop|N) tabulated per scene",
-      [](const FilmgrainCommand&) { return engine_choice("table"); }, parse_kinetics_value },
+      "the grain's fate is decided (exact); table = P(develop|N) tabulated per scene; curve = "
+      "the fast per-grain kernel: P(develop|mean photons) from that table, one uniform per grain",
+      [](const FilmgrainCommand&) {
+          return engine_choice("curve where a table pays for itself (large frames), else early; "
+                               "fast: curve");
+      },
+      parse_kinetics_value },
     { "photons", "disc|centre",
       "expert override: exposure integrated over each grain's disc, or sampled at its centre",
-      [](const FilmgrainCommand&) { return engine_choice("disc; fast: centre"); },
+      [](const FilmgrainCommand&) { return engine_choice("disc, centre with kinetics=curve; fast: centre"); },
       parse_photons_value },
-    { "coverage", "exact|scanline",
-      "expert override: exact pixel coverage, or chord unions on sub-scanlines",
-      [](const FilmgrainCommand&) { return engine_choice("exact; fast: scanline"); },
-      parse_coverage_value },
-    { "samples", "N", "sub-scanlines per pixel row for scanline coverage, [1, 256]",
+    { "coverage", "exact|scanline|raster",
+      "expert override: exact pixel coverage, chord unions on sub-scanlines, or a raster of 64 "
+      "points across a pixel and `samples` rows down it",
       [](const FilmgrainCommand&) {
-          return engine_choice("2 chords per smallest mean grain radius");
+          return engine_choice("raster with kinetics=curve where its rows resolve the grains, "
+                               "else exact; fast: raster");
+      },
+      parse_coverage_value },
+    { "samples", "N",
+      "sub-scanlines per pixel row (scanline coverage) or sample rows per pixel (raster), [1, 256]",
+      [](const FilmgrainCommand&) {
+          return engine_choice("scanline: 2 chords per smallest mean grain radius; raster: rows "
+                               "for the tolerance, 15 per smallest mean radius at 0.002 (fast: 4)");
       },
       parse_samples },
     { "tile", "N", "work tile side in scan pixels, [1, 4096]; speed only, never the output",

@@ -51,13 +51,19 @@ SCENES = {
     },
     # The default engine (auto: on frames this small the early-stopped
     # chain, exact coverage) and the fast one with its table forced
-    # (tabulated kinetics, centre exposure, scanline coverage) on the same
-    # scenes: both are deterministic too (tables' Monte Carlo streams are
-    # seeded).
+    # (tabulated kinetics, centre exposure, raster coverage; until 0.2 it
+    # was scanline coverage, hence the reference's change then), and the
+    # fast per-grain kernel (kinetics=curve) on the same scenes: all are
+    # deterministic too (tables' Monte Carlo streams are seeded).
     "wedge_one_layer_auto": {
         "input": None,
         "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
                  ":width_mm=2:scan=168x16:seed=1:engine=auto"],
+    },
+    "gradient_three_layer_kernel": {
+        "input": (40, 30),
+        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=fast"
+                 ":kinetics=curve"],
     },
     "gradient_three_layer_fast": {
         "input": (40, 30),

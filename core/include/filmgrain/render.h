@@ -54,6 +54,10 @@ enum class KineticsMethod {
                  ///< decision is exactly the full chain's (no error)
     table,       ///< P(develop | N) tabulated once per scene by running the
                  ///< chain; grains sample it (Monte Carlo error, reported)
+    curve,       ///< P(develop | mean photons): the table with the Poisson
+                 ///< count folded in; one uniform per grain, in the fast
+                 ///< per-grain kernel (centre exposure; the table's error
+                 ///< plus the curve's, reported)
 };
 
 /// How a grain's absorbed photon count gets its mean (MODEL.md 2).
@@ -66,6 +70,7 @@ enum class ExposureMethod {
 enum class CoverageMethod {
     exact,     ///< exact area of the union (Green's theorem)
     scanline,  ///< exact chord unions on sub-scanlines, sampled in y
+    raster,    ///< a bit per point of a samples x samples grid per pixel
 };
 
 /// Names as used on the command line, in metadata and statistics.
@@ -96,8 +101,9 @@ struct RenderSettings {
     std::optional<KineticsMethod> kinetics;
     std::optional<ExposureMethod> exposure_method;
     std::optional<CoverageMethod> coverage;
-    /// Sub-scanlines per pixel row for scanline coverage; 0: the engine's.
-    /// [0, 256].
+    /// Sub-scanlines per pixel row for scanline coverage, or points per
+    /// pixel side for raster coverage (a power of two up to 64 there); 0:
+    /// the engine's. [0, 256].
     int coverage_samples = 0;
     /// Scan (output) width in pixels over the whole frame; 0: the input's.
     int64_t scan_width = 0;

@@ -75,8 +75,9 @@ struct FilmgrainOptions {
     std::optional<KineticsMethod> kinetics;
     std::optional<ExposureMethod> exposure_method;
     std::optional<CoverageMethod> coverage;
-    /// Sub-scanlines per pixel row of scanline coverage. int; default 0 =
-    /// the engine's choice; range [0, 256].
+    /// Sub-scanlines per pixel row of scanline coverage, or sample rows per
+    /// pixel of raster coverage. int; default 0 = the engine's choice;
+    /// range [0, 256].
     int coverage_samples = 0;
 
     /// Scan width in pixels over the whole frame. int64_t; default 0 =

@@ -1,0 +1,119 @@
+// filmgrain: the per-grain kernel of the fast paths. MODEL.md 1-4 for the
+// grains of a tile in one plain loop per cell, chosen once per population
+// (OCIO's "renderer chosen once"):
+//   - generation: the population's Poisson process, cell by cell as
+//     PopulationGrains splits it (same bins, cells and intensities), but
+//     each grain's position, size and develop uniform come from two words
+//     of a counter-based stream of its cell (no per-grain seeding), and its
+//     radius from the bin's tabulated quantile function;
+//   - exposure at the grain's centre times its area (ExposureMethod::centre),
+//     read from a float plane of the layer's values over the tile;
+//   - development: one uniform against P(develop | lambda) (DevelopCurve),
+//     the Poisson count and the latent-image chain folded into the curve.
+// Same distribution as the exact engine up to the errors each step reports
+// (quantile interpolation, centre exposure, the curve and its table); not
+// the same grains (the streams differ). Deterministic: everything is keyed
+// by the cell.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "exposure.h"
+#include "geometry.h"
+#include "image_formation.h"
+#include "rng.h"
+
+namespace filmgrain {
+
+/// A population's grains drawn the fast way. Thread safety: const.
+class FastGrains {
+public:
+    /// `quantiles` intervals of the radius quantile function per bin.
+    FastGrains(const PopulationGrains& grains, int quantiles = 4096);
+
+    /// Largest relative error of a tabulated radius, measured at the
+    /// midpoints between quantile nodes against the exact inverse CDF (it
+    /// is largest at the steep ends of the bins: ~0.45 in the lowest
+    /// 1/quantiles of bin 0, whose radius tends to 0, ~1e-2 at most else).
+    double max_radius_relative_error() const { return m_max_radius_error; }
+    /// Relative error of the mean disc area the table gives (what moves a
+    /// density: D = 0.434 n E[a P]), against Simpson's rule on the exact
+    /// quantile function.
+    double mean_area_relative_error() const { return m_mean_area_error; }
+
+    /// Calls visit(x_um, y_um, r_um, u_bits, id) for every grain whose centre
+    /// lies within its bin's largest radius of `rect`: u_bits is 32 uniform
+    /// bits for the grain's development, id a stable identity for the rare
+    /// grain that needs more random numbers (its photon count beyond the
+    /// curve).
+    template<typename Visit> void for_each_grain_near(const RectUm& rect, Visit&& visit) const;
+
+private:
+    PopulationGrains m_grains;
+    int m_quantiles = 0;
+    /// Per bin: radius at u = k / quantiles, k = 0..quantiles, and a copy of
+    /// the last (interpolation at u -> 1 needs no check).
+    std::vector<std::vector<double>> m_radius;
+    double m_max_radius_error = 0.0;
+    double m_mean_area_error  = 0.0;
+};
+
+template<typename Visit>
+void FastGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+{
+    constexpr double k2m32 = 0x1.0p-32;
+    const double q         = static_cast<double>(m_quantiles) * k2m32;
+    m_grains.for_each_cell_near(rect, [&](size_t b, int64_t cx, int64_t cy) {
+        const PopulationGrains::Bin& bin = m_grains.bins()[b];
+        const uint64_t cell              = m_grains.cell_id(b, cx, cy);
+        Rng count_rng(cell, Stage::fast_cell);
+        const uint64_t n = sample_poisson(bin.grains_per_um2 * bin.cell_um * bin.cell_um,
+                                          count_rng);
+        const double* radius = m_radius[b].data();
+        const double x0 = static_cast<double>(cx) * bin.cell_um;
+        const double y0 = static_cast<double>(cy) * bin.cell_um;
+        const double scale = bin.cell_um * k2m32;
+        for (uint64_t i = 0; i < n; ++i) {
+            const uint64_t w0 = counter_u64(cell, 2 * i);
+            const uint64_t w1 = counter_u64(cell, 2 * i + 1);
+            const double x    = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
+            const double y    = y0 + static_cast<double>(w0 >> 32) * scale;
+            const double t    = static_cast<double>(w1 & 0xffffffffu) * q;
+            const size_t k    = static_cast<size_t>(t);
+            const double r    = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
+            visit(x, y, r, static_cast<uint32_t>(w1 >> 32), hash_combine(cell, i));
+        }
+    });
+}
+
+/// The exposure values v of one layer (LayerExposure) over the input pixels
+/// under a film rectangle, as floats, 0 outside the image: the centre
+/// lookup of the fast kernel costs one load. Reused from tile to tile.
+class ExposurePlane {
+public:
+    /// Fills the plane for the input pixels that `rect` touches.
+    void fill(const LayerExposure& exposure, const FrameGeometry& frame, const RectUm& rect);
+
+    /// v at the input pixel holding (x, y); 0 outside the filled window
+    /// (outside the image, or beyond the rectangle it was filled for).
+    double at(double x_um, double y_um) const
+    {
+        // floor() without a library call: negative values fall outside the
+        // window whichever way they round, as the check below needs.
+        const double gx = x_um * m_inv_pitch - m_x0, gy = y_um * m_inv_pitch - m_y0;
+        if (!(gx >= 0.0 && gy >= 0.0 && gx < m_w && gy < m_h))
+            return 0.0;
+        const size_t fx = static_cast<size_t>(gx), fy = static_cast<size_t>(gy);
+        return m_v[fy * m_stride + fx];
+    }
+
+private:
+    std::vector<float> m_v;
+    double m_inv_pitch = 0.0;
+    double m_x0 = 0.0, m_y0 = 0.0, m_w = 0.0, m_h = 0.0;
+    size_t m_stride = 0;
+};
+
+}  // namespace filmgrain

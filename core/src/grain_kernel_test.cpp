@@ -1,0 +1,189 @@
+// Tests of the fast per-grain kernel's parts against the model: the folded
+// curve P(develop | lambda) against a Poisson mixture computed
+// independently and against sampled photon counts, the fast grain process
+// against its intensity and size distribution, the exposure plane, and the
+// raster coverage against exact coverage.
+#include "grain_kernel.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "develop_curve.h"
+#include "image_formation.h"
+#include "kinetics_table.h"
+#include "sampling.h"
+
+namespace filmgrain {
+namespace {
+
+DevelopTable small_table()
+{
+    Stock stock;
+    const Development dev(stock);
+    DevelopTable::Options o;
+    o.max_photons           = 256;
+    o.target_standard_error = 5e-3;
+    o.stream_key            = 3;
+    return DevelopTable({ 1e7, 1e6, 10 }, 1.0 / 48, dev, o);
+}
+
+TEST(DevelopCurve, IsThePoissonMixtureOfTheTable)
+{
+    const DevelopTable table = small_table();
+    const DevelopCurve curve(table);
+    EXPECT_GT(curve.lambda_max(), 100.0);
+    EXPECT_LT(curve.lambda_max(), 256.0);
+    EXPECT_LT(curve.max_interpolation_error(), 1e-4);
+    // Independent sum: the Poisson pmf from lgamma, every N to the table's
+    // top (the curve's own sum uses a recurrence and a window).
+    for (double lambda : { 0.0, 0.3, 2.0, 4.5, 11.0, 37.0, 80.0, curve.lambda_max() }) {
+        double sum = 0.0;
+        for (uint64_t n = 0; n <= table.max_photons(); ++n) {
+            const double pmf = lambda > 0.0
+                                   ? std::exp(n * std::log(lambda) - lambda - std::lgamma(n + 1.0))
+                                   : (n == 0 ? 1.0 : 0.0);
+            sum += pmf * table.probability(n);
+        }
+        EXPECT_NEAR(curve.probability(lambda), sum, curve.max_interpolation_error() + 1e-12)
+            << "lambda " << lambda;
+    }
+}
+
+TEST(DevelopCurve, OneUniformAgainstTheCurveDevelopsLikeSampledPhotonCounts)
+{
+    // The fast kernel's decision (u >= 1 - P(lambda)) against the table
+    // path's (N ~ Poisson(lambda), then u >= 1 - P(N)): the fractions
+    // developed of M grains each differ by a binomial sd sqrt(2 p (1 - p) / M);
+    // 5 sd.
+    const DevelopTable table = small_table();
+    const DevelopCurve curve(table);
+    constexpr int M = 200000;
+    for (double lambda : { 3.0, 12.0, 40.0 }) {
+        int by_curve = 0, by_count = 0;
+        for (int i = 0; i < M; ++i) {
+            Rng a(hash_ids(7, i), Stage::development), b(hash_ids(8, i), Stage::photons);
+            by_curve += a.uniform() >= 1.0 - curve.probability(lambda);
+            const uint64_t n = sample_poisson(lambda, b);
+            by_count += b.uniform() >= 1.0 - table.probability(n);
+        }
+        const double p  = 0.5 * (by_curve + by_count) / M;
+        const double sd = std::sqrt(2.0 * p * (1.0 - p) / M);
+        EXPECT_NEAR(static_cast<double>(by_curve) / M, static_cast<double>(by_count) / M, 5 * sd)
+            << "lambda " << lambda;
+    }
+}
+
+TEST(FastGrains, IntensityAndSizesFollowThePopulation)
+{
+    Population pop;
+    pop.grains_per_um2     = 0.4;
+    pop.diameter_um        = 2.0;
+    pop.diameter_log_sigma = 0.5;  // several radius bins
+    const PopulationGrains grains(pop, 11, 0, 0);
+    ASSERT_GT(grains.bins().size(), 1u);
+    const FastGrains fast(grains);
+    // The tabulated quantiles move the mean disc area (hence densities)
+    // by far less than any test resolves.
+    EXPECT_LT(fast.mean_area_relative_error(), 1e-4);
+    // Grains with centres in a 400 um square: count ~ Poisson(n A): 5 sd;
+    // mean disc area against a_mean: 5 standard errors of the sample mean.
+    const RectUm rect { 0.0, 0.0, 400.0, 400.0 };
+    uint64_t count = 0;
+    double sum_a = 0.0, sum_a2 = 0.0;
+    fast.for_each_grain_near(rect, [&](double x, double y, double r, uint32_t, uint64_t) {
+        if (x < rect.x0_um || x >= rect.x1_um || y < rect.y0_um || y >= rect.y1_um)
+            return;
+        ++count;
+        const double a = M_PI * r * r;
+        sum_a += a;
+        sum_a2 += a * a;
+    });
+    const double expected = pop.grains_per_um2 * 400.0 * 400.0;
+    EXPECT_NEAR(static_cast<double>(count), expected, 5 * std::sqrt(expected));
+    const double mean = sum_a / count;
+    const double se   = std::sqrt((sum_a2 / count - mean * mean) / count);
+    EXPECT_NEAR(mean, grains.mean_area_um2(), 5 * se);
+}
+
+TEST(FastGrains, ACellsGrainsDoNotDependOnTheRegionAsked)
+{
+    Population pop;
+    const PopulationGrains grains(pop, 5, 1, 0);
+    const FastGrains fast(grains);
+    std::vector<std::array<double, 3>> a, b;
+    fast.for_each_grain_near({ 0, 0, 100, 100 }, [&](double x, double y, double r, uint32_t, uint64_t) {
+        if (x >= 40 && x < 60 && y >= 40 && y < 60)
+            a.push_back({ x, y, r });
+    });
+    fast.for_each_grain_near({ 40, 40, 60, 60 }, [&](double x, double y, double r, uint32_t, uint64_t) {
+        if (x >= 40 && x < 60 && y >= 40 && y < 60)
+            b.push_back({ x, y, r });
+    });
+    EXPECT_FALSE(a.empty());
+    EXPECT_EQ(a, b);
+}
+
+TEST(RasterCoverage, ALoneDiscCoversItsArea)
+{
+    // A disc inside a 4x4 block of 10 um pixels: the rows sample its chord
+    // (midpoint rule in y, 1/64 pixel in x). Error of the midpoint rule on
+    // a disc of radius r with spacing h: O(h^1.5 r^0.5) near the poles;
+    // here within 0.5% of the area at 64 rows.
+    const std::vector<Disc> discs { { 17.3, 21.9, 8.1 } };
+    RasterScratch scratch;
+    std::vector<double> f(16);
+    raster_coverage(discs, 0, 0, 4, 4, 10.0, 10.0, 64, scratch, f.data());
+    double area = 0.0;
+    for (double v : f)
+        area += v * 100.0;
+    EXPECT_NEAR(area, M_PI * 8.1 * 8.1, 0.005 * M_PI * 8.1 * 8.1);
+}
+
+TEST(RasterCoverage, UnbiasedAgainstExactCoverageAndTileIndependent)
+{
+    // Random discs over 64x64 pixels: the mean covered fraction of the
+    // raster against exact coverage of the same discs. Pixel by pixel
+    // they differ by the sampling error; the mean of the differences over
+    // the pixels has a standard error from their spread; 5 of them.
+    std::mt19937_64 gen(1);
+    std::uniform_real_distribution<double> pos(-3.0, 131.0), rad(0.5, 2.5);
+    std::vector<Disc> discs;
+    for (int i = 0; i < 4000; ++i)
+        discs.push_back({ pos(gen), pos(gen), rad(gen) });
+    std::vector<Disc> touching;
+    for (const Disc& d : discs)
+        if (disc_touches_rect(d, 0, 0, 128, 128))
+            touching.push_back(d);
+    std::vector<double> exact(64 * 64), raster(64 * 64), tiled(64 * 64);
+    GridCoverageScratch gs;
+    grid_coverage(touching, 0, 0, 64, 64, 2.0, 2.0, gs, exact.data());
+    RasterScratch rs;
+    raster_coverage(touching, 0, 0, 64, 64, 2.0, 2.0, 8, rs, raster.data());
+    double sum = 0.0, sum2 = 0.0;
+    for (size_t i = 0; i < exact.size(); ++i) {
+        const double d = raster[i] - exact[i];
+        sum += d;
+        sum2 += d * d;
+    }
+    const double n = static_cast<double>(exact.size());
+    const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
+    EXPECT_GT(se, 0.0);
+    EXPECT_NEAR(mean, 0.0, 5 * se);
+    // A block rendered as four tiles is the same, bit for bit.
+    for (int ty = 0; ty < 2; ++ty)
+        for (int tx = 0; tx < 2; ++tx) {
+            std::vector<double> part(32 * 32);
+            raster_coverage(touching, tx * 32, ty * 32, tx * 32 + 32, ty * 32 + 32, 2.0, 2.0, 8, rs,
+                            part.data());
+            for (int y = 0; y < 32; ++y)
+                for (int x = 0; x < 32; ++x)
+                    tiled[static_cast<size_t>((ty * 32 + y) * 64 + tx * 32 + x)]
+                        = part[static_cast<size_t>(y * 32 + x)];
+        }
+    EXPECT_EQ(tiled, raster);
+}
+
+}  // namespace
+}  // namespace filmgrain
