@@ -443,7 +443,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         // The fast per-grain kernel (P(develop | mean photons), one uniform
         // per grain) wherever a table is built, unless the table itself
         // was asked for.
-        if (!settings.kinetics || *settings.kinetics == KineticsMethod::curve) {
+        if ((!settings.kinetics || *settings.kinetics == KineticsMethod::curve)
+            && settings.grains != GrainMethod::exact) {
             if (!curves[need.request])
                 curves[need.request] = std::make_shared<const DevelopCurve>(*pp.table);
             pp.kinetics = KineticsMethod::curve;
@@ -472,6 +473,15 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         plan.reason += why.str();
     }
 
+    // grains=fast asked for without the curve: the kernel's grains with the
+    // population's own decisions (to measure the curve and the raster
+    // against exact decisions and coverage on the same grains).
+    if (settings.grains == GrainMethod::fast)
+        for (LayerPlan& plan : out)
+            for (PopulationPlan& pp : plan.populations)
+                if (!pp.fast)
+                    pp.fast = std::make_shared<const FastGrains>(pp.grains);
+
     // Coverage of the layers whose grains all run the fast kernel (and of
     // every layer of the fast engine): raster where its sampling resolves
     // the grains, else what the engine had.
@@ -483,7 +493,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         const int samples = raster_samples(std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
                                            smallest_radius_um, settings.tolerance, fast);
         const bool kernel = std::all_of(plan.populations.begin(), plan.populations.end(),
-                                        [](const PopulationPlan& p) { return p.fast != nullptr; });
+                                        [](const PopulationPlan& p) { return p.curve != nullptr; });
         if (!settings.coverage && (kernel || fast) && samples > 0)
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
@@ -498,6 +508,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         for (size_t p = 0; p < plan.populations.size(); ++p)
             path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
         const ExposureMethod exposure = plan.populations.front().exposure;
+        if (plan.populations.front().fast)
+            path << " grains=fast";
         path << " exposure=" << exposure_method_name(exposure)
              << " coverage=" << coverage_method_name(plan.coverage);
         if (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster)

@@ -71,6 +71,11 @@ const char* coverage_method_name(CoverageMethod method)
     return "unknown";
 }
 
+const char* grain_method_name(GrainMethod method)
+{
+    return method == GrainMethod::exact ? "exact" : "fast";
+}
+
 std::vector<std::string> engine_names() { return { "auto", "exact", "fast" }; }
 
 namespace {
@@ -102,6 +107,12 @@ bool parse_kinetics_method(const std::string& name, KineticsMethod& out)
     return parse_by_name(name, all, kinetics_method_name, out);
 }
 
+bool parse_grain_method(const std::string& name, GrainMethod& out)
+{
+    constexpr GrainMethod all[] = { GrainMethod::exact, GrainMethod::fast };
+    return parse_by_name(name, all, grain_method_name, out);
+}
+
 bool parse_exposure_method(const std::string& name, ExposureMethod& out)
 {
     constexpr ExposureMethod all[] = { ExposureMethod::disc, ExposureMethod::centre };
@@ -125,9 +136,14 @@ Status RenderSettings::validate() const
         return Status::errorf("tile size = ", tile_size_px, ": must be in [1, 4096]");
     if (nthreads < 0)
         return Status::errorf("nthreads = ", nthreads, ": must be >= 0");
-    if (engine == Engine::exact && (kinetics || exposure_method || coverage || coverage_samples))
-        return Status::error("the exact engine is the reference: its kinetics, exposure and "
-                             "coverage methods cannot be overridden (use engine=fast or auto)");
+    if (engine == Engine::exact
+        && (kinetics || exposure_method || coverage || coverage_samples || grains))
+        return Status::error("the exact engine is the reference: its kinetics, exposure, "
+                             "coverage and grain methods cannot be overridden (use engine=fast "
+                             "or auto)");
+    if (kinetics == KineticsMethod::curve && grains == GrainMethod::exact)
+        return Status::error("kinetics=curve runs in the fast per-grain kernel, which draws "
+                             "grains=fast");
     return {};
 }
 
@@ -313,8 +329,10 @@ private:
     void develop_fast(const PopulationPlan& pop, const RectUm& rect, std::vector<Disc>& discs,
                       FastCounts& c, Integral&& integral) const
     {
-        const DevelopCurve& curve = *pop.curve;
-        const double lambda_max   = curve.lambda_max();
+        // Without a curve (grains=fast asked for with other kinetics) every
+        // grain takes the population's own decision.
+        const DevelopCurve* curve = pop.curve.get();
+        const double lambda_max   = curve ? curve->lambda_max() : -1.0;
         const double k            = pop.photons_per_value_um2;
         pop.fast->for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits,
                                                 uint64_t id) {
@@ -327,10 +345,10 @@ private:
             bool developed;
             GrainOutcome o;  // photons and events: only beyond the curve
             if (lambda <= lambda_max) {
-                developed = u >= 1.0 - curve.probability(lambda);
+                developed = u >= 1.0 - curve->probability(lambda);
             } else {
-                // Beyond the curve (blown highlights): the photon count, then
-                // the table or the chain, as the table path does.
+                // Beyond the curve (blown highlights), or no curve: the photon
+                // count, then the table or the chain, as the table path does.
                 Grain g { x, y, r, id };
                 o = decide_from_mean(pop, g, lambda, u);
                 developed = o.developed;

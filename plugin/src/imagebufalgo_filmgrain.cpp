@@ -125,7 +125,7 @@ void set_metadata(OIIO::ImageSpec& spec, const FilmgrainOptions& opts)
     spec.attribute("filmgrain:exposure_stops", static_cast<float>(opts.scene.exposure_stops));
     spec.attribute("filmgrain:shutter_s", static_cast<float>(opts.scene.shutter_s));
     spec.attribute("filmgrain:frame_width_mm", static_cast<float>(opts.scene.frame_width_mm));
-    spec.attribute("filmgrain:engine", engine_name(opts.engine));
+    spec.attribute("filmgrain:engine", engine_name(opts.engine_options.engine));
     spec.attribute("filmgrain:version", version_string());
 }
 
@@ -141,12 +141,7 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     }
 
     RenderSettings settings;
-    settings.engine           = opts.engine;
-    settings.tolerance        = opts.tolerance;
-    settings.kinetics         = opts.kinetics;
-    settings.exposure_method  = opts.exposure_method;
-    settings.coverage         = opts.coverage;
-    settings.coverage_samples = opts.coverage_samples;
+    static_cast<EngineOptions&>(settings) = opts.engine_options;
     settings.scan_width   = opts.scan_width;
     settings.scan_height  = opts.scan_height;
     settings.tile_size_px = opts.tile_size_px;

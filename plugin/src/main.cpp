@@ -534,12 +534,7 @@ int render(const CliArgs& a, const Console& con)
     opts.scene        = cmd.scene;
     if (a.wedge && !cmd.has_width_mm)
         opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
-    opts.engine           = cmd.engine;
-    opts.tolerance        = cmd.tolerance;
-    opts.kinetics         = cmd.kinetics;
-    opts.exposure_method  = cmd.exposure_method;
-    opts.coverage         = cmd.coverage;
-    opts.coverage_samples = cmd.coverage_samples;
+    opts.engine_options = cmd.engine_options;
     opts.scan_width   = cmd.scan_width;
     opts.scan_height  = cmd.scan_height;
     opts.tile_size_px = cmd.tile_size_px;

@@ -244,7 +244,7 @@ std::string engine_list()
 
 bool parse_engine_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    if (!parse_engine(std::string(v), cmd.engine)) {
+    if (!parse_engine(std::string(v), cmd.engine_options.engine)) {
         why = "unknown engine (known: " + engine_list() + ")";
         return false;
     }
@@ -260,7 +260,7 @@ bool parse_tolerance(std::string_view v, FilmgrainCommand& cmd, std::string& why
         why = "must be in (0, 1] (a density error budget)";
         return false;
     }
-    cmd.tolerance = t;
+    cmd.engine_options.tolerance = t;
     return true;
 }
 
@@ -287,7 +287,7 @@ bool parse_kinetics_value(std::string_view v, FilmgrainCommand& cmd, std::string
         why = "unknown kinetics method (known: " + names_of(kKinetics, kinetics_method_name) + ")";
         return false;
     }
-    cmd.kinetics = m;
+    cmd.engine_options.kinetics = m;
     return true;
 }
 
@@ -299,7 +299,7 @@ bool parse_photons_value(std::string_view v, FilmgrainCommand& cmd, std::string&
               + names_of(kExposureMethods, exposure_method_name) + ")";
         return false;
     }
-    cmd.exposure_method = m;
+    cmd.engine_options.exposure_method = m;
     return true;
 }
 
@@ -310,7 +310,20 @@ bool parse_coverage_value(std::string_view v, FilmgrainCommand& cmd, std::string
         why = "unknown coverage method (known: " + names_of(kCoverage, coverage_method_name) + ")";
         return false;
     }
-    cmd.coverage = m;
+    cmd.engine_options.coverage = m;
+    return true;
+}
+
+constexpr GrainMethod kGrains[] = { GrainMethod::exact, GrainMethod::fast };
+
+bool parse_grains_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    GrainMethod m;
+    if (!parse_grain_method(std::string(v), m)) {
+        why = "unknown grain method (known: " + names_of(kGrains, grain_method_name) + ")";
+        return false;
+    }
+    cmd.engine_options.grains = m;
     return true;
 }
 
@@ -319,7 +332,7 @@ bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     int64_t n = 0;
     if (!parse_int_in(v, 1, 256, n, why))
         return false;
-    cmd.coverage_samples = static_cast<int>(n);
+    cmd.engine_options.coverage_samples = static_cast<int>(n);
     return true;
 }
 
@@ -383,10 +396,10 @@ const Modifier kModifiers[] = {
     { "engine", "auto|exact|fast",
       "simulation engine: exact is the reference (every photon and event, exact coverage); "
       "auto runs the paths the scene needs within the tolerance; fast the fastest paths",
-      [](const FilmgrainCommand& d) { return std::string(engine_name(d.engine)); },
+      [](const FilmgrainCommand& d) { return std::string(engine_name(d.engine_options.engine)); },
       parse_engine_value },
     { "tolerance", "D", "density error budget of the approximate paths (auto), (0, 1]",
-      [](const FilmgrainCommand& d) { return format_number(d.tolerance); }, parse_tolerance },
+      [](const FilmgrainCommand& d) { return format_number(d.engine_options.tolerance); }, parse_tolerance },
     { "kinetics", "chain|early|table|curve",
       "expert override (not with engine=exact): chain = every event; early = the chain until "
       "the grain's fate is decided (exact); table = P(develop|N) tabulated per scene; curve = "
@@ -408,6 +421,12 @@ const Modifier kModifiers[] = {
                                "else exact; fast: raster");
       },
       parse_coverage_value },
+    { "grains", "exact|fast",
+      "expert override: the reference's grain streams, or the fast kernel's (counter-based per "
+      "cell, tabulated size quantiles: same distribution, other grains); grains=fast with "
+      "kinetics=early runs the exact decisions on the kernel's grains (for measuring it)",
+      [](const FilmgrainCommand&) { return engine_choice("fast with kinetics=curve, else exact"); },
+      parse_grains_value },
     { "samples", "N",
       "sub-scanlines per pixel row (scanline coverage) or sample rows per pixel (raster), [1, 256]",
       [](const FilmgrainCommand&) {

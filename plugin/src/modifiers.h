@@ -29,14 +29,9 @@ struct FilmgrainCommand {
     SceneSettings scene;
     /// Whether `width_mm=` was given (the --wedge strip has its own width).
     bool has_width_mm = false;
-    /// `engine=`, `tolerance=`.
-    Engine engine    = RenderSettings().engine;
-    double tolerance = RenderSettings().tolerance;
-    /// `kinetics=`, `photons=`, `coverage=`, `samples=`: expert overrides.
-    std::optional<KineticsMethod> kinetics;
-    std::optional<ExposureMethod> exposure_method;
-    std::optional<CoverageMethod> coverage;
-    int coverage_samples = 0;
+    /// `engine=`, `tolerance=`, and the expert overrides `kinetics=`,
+    /// `photons=`, `coverage=`, `grains=`, `samples=`.
+    EngineOptions engine_options;
     /// `scan=WxH|W`: scan pixels over the whole frame; 0 = the input's size
     /// (scan_height 0 with scan_width set: the frame's aspect).
     int64_t scan_width  = 0;

@@ -6,7 +6,8 @@ import re
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
 MODIFIERS = ["stock", "exposure", "shutter", "seed", "width_mm", "scan", "roi",
-             "engine", "tolerance", "kinetics", "photons", "coverage", "samples", "tile"]
+             "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "samples",
+             "tile"]
 
 OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",
            "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",

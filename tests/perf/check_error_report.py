@@ -3,18 +3,19 @@
 
     check_error_report.py --bin build/plugin/filmgrain --work DIR
 
-Runs `tools/perf/error_report.py --small` (the step wedge with the paper and
-the colour stock, one seed; exact, auto, auto with its table forced, fast)
-into DIR and checks what issue 4 asks of the default: `auto` at its default
-tolerance agrees with `exact` within 0.003 in patch-mean density and within
+Runs `tools/perf/error_report.py --small` (the step wedge with the paper
+stock, six seeds, and the colour stock, four; exact, auto, auto with its table forced, auto
+with its fast per-grain kernel forced, fast) into DIR and checks what issues
+4 and 9 ask of the default: `auto` at its default tolerance agrees with
+`exact` within 0.003 (the kernel: 0.002) in patch-mean density and within
 3% in RMS granularity, and develops the same fraction of grains. auto is
 checked as it chooses (on these small wedges often the early-stopped chain,
-identical to exact) and with its table forced (what it runs on frames large
-enough for the table to pay). Exits 1 and names every failed check.
+identical to exact), with its table forced (issue 4's table path) and with
+its kernel forced (what it runs on frames large enough for a table to pay). Exits 1 and names every failed check.
 
 Tolerances come from the variance, never from a hand-picked number: each
-check is "the measured difference is within the allowed error (0.003 D,
-3%) plus z standard errors", with the standard error estimated from the
+check is "the measured difference is within the allowed error (0.003 or
+0.002 D, 3%) plus z standard errors", with the standard error estimated from the
 same run (batch means over blocks of the patch, bands of apertures, or the
 binomial variance of developed counts; error_report.py says how), and z
 the Bonferroni-corrected quantile for a family-wise false-alarm rate of
@@ -45,14 +46,18 @@ from statistics import NormalDist
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPORT = os.path.join(HERE, "..", "..", "tools", "perf", "error_report.py")
 
-DENSITY_BUDGET = 0.003      # issue 4: patch-mean density within 0.003
+# Patch-mean density budgets: issue 4 held the chain and the table to
+# 0.003; issue 9 holds the fast per-grain kernel to 0.002.
+DENSITY_BUDGET = {"auto": 0.003, "auto, table forced": 0.003, "auto, kernel forced": 0.002}
 GRANULARITY_BUDGET = 0.03   # and RMS granularity within 3%
 FAMILY_ALPHA = 1e-3         # false-alarm rate of each family of checks
 MAX_DETECTABLE = 0.02       # power: a pooled bias of 0.02 D must be detectable
 THIRDS = ((0, 7), (7, 14), (14, 21))  # toe, straight part, shoulder of the wedge
 # auto as it chooses (on these small wedges: the chain, exact) and auto with
-# its table forced (what it runs where a table pays): both held to issue 4.
-ACCEPT = ("auto", "auto, table forced")
+# its table forced (issue 4's table path): both held to issue 4.
+# The kernel (kinetics=curve, what auto runs where a table pays since 0.2)
+# forced as well.
+ACCEPT = ("auto", "auto, table forced", "auto, kernel forced")
 
 
 @functools.lru_cache(maxsize=None)
@@ -147,8 +152,11 @@ def main():
             chk.check(est <= 0.002, f"{sc} {cfg}: reported error_estimate {est:.5f} <= 0.002")
         path = summary[(sc, "auto, table forced")]["path"]
         chk.check("kinetics=table" in path, f"{sc} auto, table forced: path '{path}' has a table")
+        path = summary[(sc, "auto, kernel forced")]["path"]
+        chk.check("kinetics=curve" in path and "coverage=raster" in path,
+                  f"{sc} auto, kernel forced: path '{path}' is the kernel with raster coverage")
 
-    # 2. Per step and layer: |bias| <= 0.003 + t * se, for the mean of pixel
+    # 2. Per step and layer: |bias| <= budget + t * se, for the mean of pixel
     #    densities and the macro density. Steps where auto and exact are
     #    identical (se 0) must have bias 0.
     n_dens = 2 * len(steps)
@@ -157,9 +165,10 @@ def main():
         for kind in ("mean", "macro"):
             b, ci, n = r[f"bias_{kind}"], r[f"ci_{kind}"], r["blocks"]
             se = step_se(ci, n)
-            lim = DENSITY_BUDGET + (t_quantile(p_step, n - 1) * se if se > 0 else 0.0)
+            budget = DENSITY_BUDGET[r["config"]]
+            lim = budget + (t_quantile(p_step, n - 1) * se if se > 0 else 0.0)
             chk.check(abs(b) <= lim, f"{r['scene']} {r['config']} {r['layer']} step {r['step']:2d} "
-                      f"{kind:5s} D bias {b:+.4f} within {lim:.4f} (0.003 + t*se, se {se:.4f})")
+                      f"{kind:5s} D bias {b:+.4f} within {lim:.4f} ({budget} + t*se, se {se:.4f})")
 
     # 3. Pooled over thirds of the wedge (more power than one step):
     #    mean of the step biases, se from the steps' se (independent patches).
@@ -175,10 +184,11 @@ def main():
                 bias = sum(r[f"bias_{kind}"] for r in part) / len(part)
                 ses = [step_se(r[f"ci_{kind}"], r["blocks"]) for r in part]
                 se = math.sqrt(sum(s * s for s in ses)) / len(part)
-                lim = DENSITY_BUDGET + z_pool * se
+                lim = DENSITY_BUDGET[cfg] + z_pool * se
                 detectable.append((lim, f"{sc} {cfg} {layer} steps {a}-{b - 1} {kind}"))
                 chk.check(abs(bias) <= lim, f"{sc} {cfg} {layer} steps {a:2d}-{b - 1:2d} {kind:5s} "
-                          f"D bias {bias:+.5f} within {lim:.5f} (0.003 + z*se, se {se:.5f})")
+                          f"D bias {bias:+.5f} within {lim:.5f} ({DENSITY_BUDGET[cfg]} + z*se, "
+                          f"se {se:.5f})")
     worst = max(detectable)
     chk.check(worst[0] <= MAX_DETECTABLE, f"power: largest pooled detectable bias {worst[0]:.4f} "
               f"({worst[1]}) <= {MAX_DETECTABLE}")

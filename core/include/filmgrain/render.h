@@ -73,8 +73,20 @@ enum class CoverageMethod {
     raster,    ///< a bit per point of a samples x samples grid per pixel
 };
 
+/// How a population's grains are drawn (MODEL.md 1). Both are the same
+/// Poisson process of lognormal discs; they differ in their streams, so a
+/// seed gives different grains with each.
+enum class GrainMethod {
+    exact,  ///< PCG streams per grain, sizes by inverting the normal CDF
+            ///< (the reference's grains)
+    fast,   ///< counter-based streams per cell, sizes from tabulated
+            ///< quantiles (the fast kernel's; its error is reported)
+};
+
 /// Names as used on the command line, in metadata and statistics.
 const char* engine_name(Engine engine);
+const char* grain_method_name(GrainMethod method);
+bool parse_grain_method(const std::string& name, GrainMethod& out);
 const char* kinetics_method_name(KineticsMethod method);
 const char* exposure_method_name(ExposureMethod method);
 const char* coverage_method_name(CoverageMethod method);
@@ -90,8 +102,9 @@ bool parse_coverage_method(const std::string& name, CoverageMethod& out);
 /// from the thread that called render_negative, at most ~10 times a second.
 using ProgressCallback = std::function<bool(double fraction_done)>;
 
-/// How to render: engine, scan resolution, region, threads.
-struct RenderSettings {
+/// The engine and its knobs, declared once: RenderSettings, the operator's
+/// FilmgrainOptions and the CLI's command all carry this block.
+struct EngineOptions {
     Engine engine = Engine::automatic;
     /// Density error budget of the approximate paths (auto): the largest
     /// bias of a patch-mean density that a path may add. (0, 1].
@@ -101,10 +114,14 @@ struct RenderSettings {
     std::optional<KineticsMethod> kinetics;
     std::optional<ExposureMethod> exposure_method;
     std::optional<CoverageMethod> coverage;
-    /// Sub-scanlines per pixel row for scanline coverage, or points per
-    /// pixel side for raster coverage (a power of two up to 64 there); 0:
-    /// the engine's. [0, 256].
+    std::optional<GrainMethod> grains;
+    /// Sub-scanlines per pixel row for scanline coverage, or sample rows per
+    /// pixel for raster coverage; 0: the engine's. [0, 256].
     int coverage_samples = 0;
+};
+
+/// How to render: engine, scan resolution, region, threads.
+struct RenderSettings : EngineOptions {
     /// Scan (output) width in pixels over the whole frame; 0: the input's.
     int64_t scan_width = 0;
     /// Scan height; 0: the frame's aspect at scan_width (or the input's).

@@ -61,24 +61,15 @@ struct FilmgrainOptions {
     /// default 0: selects the grain pattern).
     SceneSettings scene;
 
-    /// The simulation engine. Type Engine; default RenderSettings' default
-    /// (Engine::automatic, "auto": the paths the scene needs within
-    /// `tolerance`). Engine::exact is the reference.
-    Engine engine = RenderSettings().engine;
-
-    /// Density error budget of the approximate paths. double; default
-    /// RenderSettings' (0.002); range (0, 1].
-    double tolerance = RenderSettings().tolerance;
-
-    /// Expert overrides of the engine's path choices (not with
-    /// Engine::exact). std::optional; default unset: the engine decides.
-    std::optional<KineticsMethod> kinetics;
-    std::optional<ExposureMethod> exposure_method;
-    std::optional<CoverageMethod> coverage;
-    /// Sub-scanlines per pixel row of scanline coverage, or sample rows per
-    /// pixel of raster coverage. int; default 0 = the engine's choice;
-    /// range [0, 256].
-    int coverage_samples = 0;
+    /// The simulation engine and its knobs (EngineOptions, declared once in
+    /// filmgrain/render.h with their defaults and ranges): engine (default
+    /// Engine::automatic, "auto": the paths the scene needs within
+    /// `tolerance`; Engine::exact is the reference), tolerance (density
+    /// error budget of the approximate paths, default 0.002, (0, 1]), and
+    /// the expert overrides kinetics, exposure_method, coverage, grains
+    /// (std::optional, unset: the engine decides; not with Engine::exact)
+    /// and coverage_samples (0: the engine's choice; [0, 256]).
+    EngineOptions engine_options;
 
     /// Scan width in pixels over the whole frame. int64_t; default 0 =
     /// src's width. Must fit an OIIO image (at most 2^31 - 1).
