@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <thread>
 
+#include "parallel.h"
 #include "rng.h"
 
 namespace filmgrain {
@@ -139,24 +139,16 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
     // Nodes are independent: build them on worker threads, largest first
     // (they cost most), each into its own slot.
     std::vector<NodeResult> results(m_nodes_n.size());
-    std::atomic<size_t> next_node { 0 };
     Budget budget;
-    budget.limit    = options.step_budget;
-    const auto work = [&]() {
-        for (size_t k; !budget.exceeded && (k = next_node++) < m_nodes_n.size();) {
-            const size_t i = m_nodes_n.size() - 1 - k;
-            results[i] = estimate_node(m_nodes_n[i], rates, shutter_s, dev, m_options, budget);
-        }
-    };
-    int nthreads = options.nthreads > 0 ? options.nthreads
-                                        : static_cast<int>(std::thread::hardware_concurrency());
-    nthreads = std::max(1, std::min<int>(nthreads, static_cast<int>(m_nodes_n.size())));
-    std::vector<std::thread> threads;
-    for (int t = 1; t < nthreads; ++t)
-        threads.emplace_back(work);
-    work();
-    for (auto& t : threads)
-        t.join();
+    budget.limit = options.step_budget;
+    std::atomic<bool> stop { false };
+    const int64_t n = static_cast<int64_t>(m_nodes_n.size());
+    parallel_for(n, options.nthreads, stop, [&](int, int64_t k) {
+        if (budget.exceeded)
+            return;
+        const size_t i = static_cast<size_t>(n - 1 - k);
+        results[i] = estimate_node(m_nodes_n[i], rates, shutter_s, dev, m_options, budget);
+    });
     if (budget.exceeded) {
         m_complete    = false;
         m_total_steps = budget.spent;

@@ -7,10 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <limits>
-#include <mutex>
-#include <thread>
 
 #include "development.h"
 #include "engine_plan.h"
@@ -19,6 +16,7 @@
 #include "grain_kernel.h"
 #include "image_formation.h"
 #include "kinetics.h"
+#include "parallel.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -196,7 +194,8 @@ struct GrainOutcome {
 class TileRenderer {
 public:
     TileRenderer(const Stock& stock, const SceneSettings& scene, const FrameGeometry& frame,
-                 const Roi& roi, const std::vector<LayerPlan>& layers, float* out)
+                 const Roi& roi, const std::vector<LayerPlan>& layers, float* out,
+                 const std::atomic<bool>& stop)
         : m_stock(stock)
         , m_scene(scene)
         , m_frame(frame)
@@ -205,6 +204,7 @@ public:
         , m_out(out)
         , m_development(stock)
         , m_counters(stock.layers.size())
+        , m_stop(stop)
     {
     }
 
@@ -242,6 +242,7 @@ public:
                     continue;
                 }
                 pop.grains.for_each_grain_near(rect, [&](const Grain& g) {
+                    poll_stop();
                     const Disc disc { g.x_um, g.y_um, g.radius_um };
                     if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                         return;
@@ -315,6 +316,15 @@ private:
                  pop.rates.k_loss_per_s * scale };
     }
 
+    /// Leaves the tile (throws Stopped) once the render is stopped; looks
+    /// at the flag every 4096 grains (a few microseconds of work apart).
+    void poll_stop() const
+    {
+        thread_local uint32_t count = 0;
+        if ((++count & 4095u) == 0 && m_stop.load(std::memory_order_relaxed))
+            throw Stopped {};
+    }
+
     /// Counters of the fast kernel for one population and tile.
     struct FastCounts {
         uint64_t grains = 0, developed = 0, photons = 0, events = 0;
@@ -336,6 +346,7 @@ private:
         const double k            = pop.photons_per_value_um2;
         pop.fast->for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits,
                                                 uint64_t id) {
+            poll_stop();
             const Disc disc { x, y, r };
             if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                 return;
@@ -472,6 +483,7 @@ private:
     float* m_out;
     Development m_development;
     std::vector<LayerCounters> m_counters;
+    const std::atomic<bool>& m_stop;
 };
 
 /// Counts the special input pixels the render reads.
@@ -606,56 +618,44 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (Status s = plan_layers(stock, scene, input, frame, roi, settings, plan); !s)
             return s;
 
-        const int64_t ts = settings.tile_size_px;
+        // Tiles hold at most kGrainsPerTile grains (all layers) whatever
+        // the pixel size: memory follows the tile's work, every thread gets
+        // tiles, and a stop is seen within a tile (render_tile checks it
+        // every few thousand grains). Speed only: never the output.
+        double grains_per_px = 0.0;
+        for (const Layer& layer : stock.layers)
+            for (const Population& pop : layer.populations)
+                grains_per_px += pop.grains_per_um2 * frame.scan_pitch_x_um * frame.scan_pitch_y_um;
+        constexpr double kGrainsPerTile = 1 << 18;
+        const int64_t ts = std::clamp<int64_t>(
+            static_cast<int64_t>(std::sqrt(kGrainsPerTile / std::max(grains_per_px, 1e-300))), 1,
+            settings.tile_size_px);
         const int64_t ntx = (roi.width() + ts - 1) / ts, nty = (roi.height() + ts - 1) / ts;
         const int64_t ntiles = ntx * nty;
-        int nthreads = settings.nthreads > 0 ? settings.nthreads
-                                             : static_cast<int>(std::thread::hardware_concurrency());
-        nthreads = static_cast<int>(std::clamp<int64_t>(nthreads, 1, std::max<int64_t>(1, ntiles)));
 
-        TileRenderer renderer(stock, scene, frame, roi, plan, density);
-        std::vector<TileScratch> scratch(static_cast<size_t>(nthreads));
-        std::atomic<int64_t> next_tile { 0 }, tiles_done { 0 };
-        std::atomic<bool> cancel { false };
-        std::mutex mutex;
-        std::condition_variable wake;
-        std::string worker_error;
-        const auto work = [&](TileScratch& tile_scratch) {
-            try {
-                for (int64_t t; !cancel && (t = next_tile++) < ntiles;) {
-                    const int64_t x0 = roi.x_begin + (t % ntx) * ts;
-                    const int64_t y0 = roi.y_begin + (t / ntx) * ts;
-                    renderer.render_tile(tile_scratch, x0, y0, std::min(x0 + ts, roi.x_end),
-                                         std::min(y0 + ts, roi.y_end));
-                    ++tiles_done;
+        std::atomic<bool> stop { false };
+        bool cancelled = false;
+        TileRenderer renderer(stock, scene, frame, roi, plan, density, stop);
+        std::vector<TileScratch> scratch(
+            static_cast<size_t>(parallel_workers(ntiles, settings.nthreads)));
+        std::function<void(int64_t)> poll;
+        if (settings.progress)
+            poll = [&](int64_t done) {
+                if (!stop && !settings.progress(static_cast<double>(done) / ntiles)) {
+                    cancelled = true;
+                    stop      = true;
                 }
-            } catch (const std::exception& e) {
-                std::lock_guard<std::mutex> lock(mutex);
-                worker_error = e.what();
-                cancel       = true;
-            }
-            wake.notify_all();
-        };
-        std::vector<std::thread> threads;
-        for (int t = 0; t < nthreads; ++t)
-            threads.emplace_back(work, std::ref(scratch[static_cast<size_t>(t)]));
-        {
-            std::unique_lock<std::mutex> lock(mutex);
-            while (tiles_done < ntiles && !cancel) {
-                wake.wait_for(lock, std::chrono::milliseconds(100));
-                if (settings.progress && !cancel) {
-                    lock.unlock();
-                    if (!settings.progress(static_cast<double>(tiles_done) / ntiles))
-                        cancel = true;
-                    lock.lock();
-                }
-            }
-        }
-        for (auto& th : threads)
-            th.join();
-        if (!worker_error.empty())
-            return Status::errorf("render failed: ", worker_error);
-        if (tiles_done < ntiles)
+            };
+        const int64_t done = parallel_for(
+            ntiles, settings.nthreads, stop,
+            [&](int worker, int64_t t) {
+                const int64_t x0 = roi.x_begin + (t % ntx) * ts;
+                const int64_t y0 = roi.y_begin + (t / ntx) * ts;
+                renderer.render_tile(scratch[static_cast<size_t>(worker)], x0, y0,
+                                     std::min(x0 + ts, roi.x_end), std::min(y0 + ts, roi.y_end));
+            },
+            poll);
+        if (cancelled || done < ntiles)
             return Status::error("render cancelled");
         if (settings.progress)
             settings.progress(1.0);
