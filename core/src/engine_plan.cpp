@@ -174,21 +174,44 @@ std::shared_ptr<const DevelopTable> cached_table(const KineticsRates& rates, dou
     return table;
 }
 
+/// How auto shares its density error budget (tolerance): the tables (and
+/// the curves folded from them) get three quarters, raster coverage the
+/// rest.
+constexpr double kTableShare  = 0.75;
+constexpr double kRasterShare = 0.25;
+
+/// Developed grain centres per pixel, at zero exposure (fog), that the
+/// pixel scale needs (auto): below, the per-grain kernel runs. Measured
+/// (docs/performance): with 26 (tools/perf/stocks/real-scale.json, 6.25 um
+/// pixels) its mean density is within 0.002 of the per-grain kernel's up
+/// to D = 2.2; with 5 (fine-color) within 0.003 up to D = 1.
+
+constexpr double kMinDevelopedPerPixel = 16.0;
+
 /// Rows of raster coverage per pixel (its points across a pixel are 64):
-/// enough rows across the smallest mean grain radius for the tolerance, or
-/// 0 when more than 256 would be needed (grains far below the pixel: exact
-/// coverage then). The per-pixel sampling noise biases the mean of pixel
+/// enough rows across the smallest mean grain radius for the tolerance, at
+/// most 256. The per-pixel sampling noise biases the mean of pixel
 /// densities (the log is convex), most where few points are uncovered.
 /// Measured on the colour wedge (6.25 um pixels, docs/performance): the
 /// largest step bias falls as (rows per radius)^-2.3 and is 0.0009 at 16
-/// rows per radius; rows are chosen to keep it below half the tolerance:
-/// rows per radius = (1.04 / tolerance)^(1 / 2.3), 15 at 0.002. The fast
-/// engine takes 4 rows per radius, whatever the bias (~0.05 at D = 2).
+/// rows per radius (raster_bias()); rows are chosen to keep it below the
+/// raster's share of the tolerance: rows per radius =
+/// (0.52 / (kRasterShare tolerance))^(1 / 2.3), 21 at 0.002. The fast
+/// engine takes 4 rows per radius, whatever the bias (~0.02-0.05).
 int raster_samples(double pitch_um, double smallest_radius_um, double tolerance, bool fast)
 {
-    const double rows_per_radius = fast ? 4.0 : std::pow(1.04 / tolerance, 1.0 / 2.3);
+    const double rows_per_radius
+        = fast ? 4.0 : std::pow(0.52 / (kRasterShare * tolerance), 1.0 / 2.3);
     const double want = std::ceil(rows_per_radius * pitch_um / smallest_radius_um);
-    return want > 256.0 ? 0 : static_cast<int>(std::max(want, 1.0));
+    return static_cast<int>(std::clamp(want, 1.0, 256.0));
+}
+
+/// The bias model of raster_samples: the largest step bias of the mean of
+/// pixel densities with `rows` per pixel.
+double raster_bias(int rows, double pitch_um, double smallest_radius_um)
+{
+    const double rows_per_radius = rows * smallest_radius_um / pitch_um;
+    return 0.52 * std::pow(rows_per_radius, -2.3);
 }
 
 std::string format_g(double v)
@@ -227,6 +250,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     const bool exact = settings.engine == Engine::exact;
     const bool fast  = settings.engine == Engine::fast;
     const Development development(stock);
+    // A table asked for (kinetics=table or curve), or needed by scale=pixel:
+    // built whatever it costs.
+    const bool forced_table = settings.kinetics.has_value() || settings.scale == ScaleMethod::pixel;
 
     // A table depends only on the rates (the shutter and development are
     // the scene's): populations with the same rates share one, built once
@@ -251,7 +277,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const Layer& layer = stock.layers[l];
         LayerPlan plan { LayerExposure(input, layer.sensitivity, frame.input_pitch_um),
-                         {}, CoverageMethod::exact, 0, 0.0, "", "", 0.0, 0.0 };
+                         {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0, 0.0 };
         double margin_um = 0.0, n_mean_area = 0.0, smallest_radius_um = 1e300;
         for (size_t p = 0; p < layer.populations.size(); ++p) {
             const Population& pop = layer.populations[p];
@@ -337,7 +363,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             // than the pixels: a ROI render must decide as the full frame
             // does.) Not needed when the table is asked for explicitly.
             const double steps
-                = settings.kinetics
+                = forced_table
                       ? 0.0
                       : pop.grains_per_um2 * frame.width_um * frame.height_um
                             * early_stop_steps_per_grain(
@@ -355,8 +381,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
             // Budget: a node error e moves a patch density by at most
             // 0.434 n E[a] e; nodes' errors partly average (estimated below).
-            const double target = std::max(fast ? 5e-3 : 0.0,
-                                           settings.tolerance / (kLog10E * n_mean_area));
+            const double target = std::max(fast ? 5e-3 : 0.0, kTableShare * settings.tolerance
+                                                                  / (kLog10E * n_mean_area));
             // Rounded up to a power of two so that frames of a sequence
             // share one table (see cached_table).
             uint64_t n_max = 64;
@@ -403,12 +429,12 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         // Otherwise only when predicted to cost less than the chains it
         // replaces, and stopped (deterministically) if it costs more than
         // twice that after all.
-        const bool pays = settings.kinetics
+        const bool pays = forced_table
                           || DevelopTable::predicted_steps(req.options, req.rates,
                                                            scene.shutter_s, development)
                                  <= req.grain_steps;
         if (pays) {
-            if (!settings.kinetics)
+            if (!forced_table)
                 req.options.step_budget
                     = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
             req.table = cached_table(req.rates, scene.shutter_s, stock, req.options);
@@ -494,16 +520,74 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                                            smallest_radius_um, settings.tolerance, fast);
         const bool kernel = std::all_of(plan.populations.begin(), plan.populations.end(),
                                         [](const PopulationPlan& p) { return p.curve != nullptr; });
-        if (!settings.coverage && (kernel || fast) && samples > 0)
+        if (!settings.coverage && (kernel || fast))
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
             continue;
-        plan.coverage_samples = settings.coverage_samples > 0 ? settings.coverage_samples
-                                                              : (samples > 0 ? samples : 256);
+        plan.coverage_samples
+            = settings.coverage_samples > 0 ? settings.coverage_samples : samples;
+        plan.error_estimate += raster_bias(
+            plan.coverage_samples, std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
+            smallest_radius_um);
+    }
+
+    // Scale (MODEL.md 5 at pixel scale): a layer whose grains all run the
+    // kernel is drawn from its pixel statistics where they describe it:
+    // every grain (to z = 4) smaller than the pixel, and enough
+    // developed grains per pixel even at zero exposure (fog) for the
+    // Gaussian approximation (measured in docs/performance).
+    for (size_t l = 0; l < out.size() && !exact; ++l) {
+        LayerPlan& plan = out[l];
+        const Layer& layer = stock.layers[l];
+        const bool curves = std::all_of(plan.populations.begin(), plan.populations.end(),
+                                        [](const PopulationPlan& p) { return p.curve != nullptr; });
+        if (settings.scale == ScaleMethod::grain || (!settings.scale && !curves))
+            continue;
+        if (!curves)
+            return Status::errorf("scale=pixel: layer '", layer.name,
+                                  "' has a population whose P(develop) depends on grain size "
+                                  "(rate_area_exponent != 0): it needs scale=grain");
+        double largest_um = 0.0;
+        for (const Population& pop : layer.populations)
+            largest_um = std::max(largest_um, std::exp(std::log(pop.diameter_um)
+                                                       - 0.5 * pop.diameter_log_sigma
+                                                             * pop.diameter_log_sigma
+                                                       + 4.0 * pop.diameter_log_sigma));
+        const double pitch_um = std::min(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
+        if (!settings.scale && largest_um > pitch_um)
+            continue;
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<PixelPopulation> pops;
+        for (size_t p = 0; p < plan.populations.size(); ++p)
+            pops.push_back({ &layer.populations[p], plan.populations[p].photons_per_value_um2,
+                             plan.populations[p].curve.get(), plan.populations[p].table.get() });
+        auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
+                                                        frame.scan_pitch_y_um);
+        const double fog_grains = model->at(0.0).developed_per_pixel;
+        if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
+            continue;
+        plan.pixel_model = std::move(model);
+        plan.pixel_key   = hash_ids(scene.seed, 0x9133, l);
+        plan.setup_seconds
+            += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::ostringstream why;
+        why << "pixel scale: grains up to " << format_g(largest_um) << " um in "
+            << format_g(pitch_um) << " um pixels, " << format_g(fog_grains)
+            << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
+               "(interpolation error: mean "
+            << format_g(plan.pixel_model->max_mean_error()) << ", sd "
+            << format_g(plan.pixel_model->max_sd_error())
+            << "), Gaussian with neighbour correlation; ";
+        plan.reason += why.str();
     }
 
     for (LayerPlan& plan : out) {
         std::ostringstream path, why;
+        if (plan.pixel_model) {
+            path << "scale=pixel kinetics=curve exposure=box";
+            plan.path = path.str();
+            continue;
+        }
         path << "kinetics=";
         for (size_t p = 0; p < plan.populations.size(); ++p)
             path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
@@ -526,10 +610,12 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                     << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "
                        "per pixel); ";
             if (plan.coverage == CoverageMethod::raster)
-                why << "coverage at " << plan.coverage_samples << "x" << plan.coverage_samples
+                why << "coverage at 64x" << plan.coverage_samples
                     << " points per pixel (unbiased in the mean transmittance, noisy per pixel: "
-                       "measured in docs/performance); ";
-            why << "error estimate = patch-mean density bias bound at 2 sigma from the tables";
+                       "its bias of the mean of pixel densities, modelled from docs/performance, "
+                       "is in the error estimate); ";
+            why << "error estimate = patch-mean density bias bound at 2 sigma from the tables, "
+                   "plus the raster's modelled bias";
         }
         plan.reason += why.str();
     }

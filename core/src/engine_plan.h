@@ -15,6 +15,7 @@
 #include "grain_kernel.h"
 #include "kinetics.h"
 #include "kinetics_table.h"
+#include "pixel_model.h"
 
 namespace filmgrain {
 
@@ -46,6 +47,10 @@ struct LayerPlan {
     /// Largest grain radius of the layer: how far beyond a tile its grains'
     /// centres (and so the exposure they read) may lie.
     double margin_um = 0.0;
+    /// ScaleMethod::pixel: the layer's pixel statistics, and the key of its
+    /// pixels' normals (no grains are generated).
+    std::shared_ptr<const PixelModel> pixel_model;
+    uint64_t pixel_key = 0;
     /// For the statistics: what runs, why, its error bound, setup time.
     std::string path;
     std::string reason;

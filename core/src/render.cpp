@@ -17,6 +17,7 @@
 #include "image_formation.h"
 #include "kinetics.h"
 #include "parallel.h"
+#include "pixel_model.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -72,6 +73,21 @@ const char* coverage_method_name(CoverageMethod method)
 const char* grain_method_name(GrainMethod method)
 {
     return method == GrainMethod::exact ? "exact" : "fast";
+}
+
+const char* scale_method_name(ScaleMethod method)
+{
+    return method == ScaleMethod::grain ? "grain" : "pixel";
+}
+
+bool parse_scale_method(const std::string& name, ScaleMethod& out)
+{
+    for (ScaleMethod m : { ScaleMethod::grain, ScaleMethod::pixel })
+        if (name == scale_method_name(m)) {
+            out = m;
+            return true;
+        }
+    return false;
 }
 
 std::vector<std::string> engine_names() { return { "auto", "exact", "fast" }; }
@@ -135,9 +151,9 @@ Status RenderSettings::validate() const
     if (nthreads < 0)
         return Status::errorf("nthreads = ", nthreads, ": must be >= 0");
     if (engine == Engine::exact
-        && (kinetics || exposure_method || coverage || coverage_samples || grains))
+        && (kinetics || exposure_method || coverage || coverage_samples || grains || scale))
         return Status::error("the exact engine is the reference: its kinetics, exposure, "
-                             "coverage and grain methods cannot be overridden (use engine=fast "
+                             "coverage, grain and scale methods cannot be overridden (use engine=fast "
                              "or auto)");
     if (kinetics == KineticsMethod::curve && grains == GrainMethod::exact)
         return Status::error("kinetics=curve runs in the fast per-grain kernel, which draws "
@@ -179,6 +195,7 @@ struct TileScratch {
     ScanlineScratch scanline;
     RasterScratch raster;
     ExposurePlane plane;
+    std::vector<double> values;
 };
 
 /// What happened to one grain.
@@ -214,6 +231,10 @@ public:
         const RectUm rect = m_frame.scan_rect(x0, y0, x1, y1);
         for (size_t l = 0; l < m_layers.size(); ++l) {
             const LayerPlan& layer = m_layers[l];
+            if (layer.pixel_model) {
+                write_pixel_scale(scratch, l, x0, y0, x1, y1);
+                continue;
+            }
             scratch.discs.clear();
             uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
             bool plane_filled = false;
@@ -433,6 +454,48 @@ private:
             o.photons, m_scene.shutter_s, scaled_rates(pop, g), kinetics_rng, &o.events, needed);
         o.developed = latent.n4 >= needed;
         return o;
+    }
+
+    /// MODEL.md 5 at pixel scale (pixel_model.h): each pixel's exposure
+    /// value is the area-weighted mean of the input pixels under it; its
+    /// transmittance is drawn from the layer's pixel model.
+    void write_pixel_scale(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0, int64_t x1,
+                           int64_t y1) const
+    {
+        const int64_t tw = x1 - x0, th = y1 - y0;
+        const LayerPlan& plan = m_layers[layer];
+        scratch.fraction.resize(static_cast<size_t>(tw * th));
+        scratch.values.resize(static_cast<size_t>(tw * th));
+        const double p = m_frame.input_pitch_um;
+        const double w = static_cast<double>(m_frame.input_width);
+        const double h = static_cast<double>(m_frame.input_height);
+        for (int64_t iy = y0; iy < y1; ++iy)
+            for (int64_t ix = x0; ix < x1; ++ix) {
+                const RectUm r = m_frame.scan_rect(ix, iy, ix + 1, iy + 1);
+                const double fx0 = std::floor(r.x0_um / p), fy0 = std::floor(r.y0_um / p);
+                const double fx1 = std::min(std::ceil(r.x1_um / p), w);
+                const double fy1 = std::min(std::ceil(r.y1_um / p), h);
+                double sum = 0.0;
+                for (double fy = std::max(fy0, 0.0); fy < fy1; ++fy) {
+                    const double oy = std::min(r.y1_um, (fy + 1) * p) - std::max(r.y0_um, fy * p);
+                    for (double fx = std::max(fx0, 0.0); fx < fx1; ++fx) {
+                        const double ox
+                            = std::min(r.x1_um, (fx + 1) * p) - std::max(r.x0_um, fx * p);
+                        if (ox > 0.0 && oy > 0.0)
+                            sum += ox * oy
+                                   * plan.exposure.value(static_cast<int64_t>(fx),
+                                                         static_cast<int64_t>(fy));
+                    }
+                }
+                scratch.values[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
+                    = sum / ((r.x1_um - r.x0_um) * (r.y1_um - r.y0_um));
+            }
+        sample_pixel_transmittance(*plan.pixel_model, plan.pixel_key, x0, y0, x1, y1,
+                                   scratch.values.data(), scratch.fraction.data());
+        for (int64_t iy = y0; iy < y1; ++iy)
+            for (int64_t ix = x0; ix < x1; ++ix)
+                store_density(layer, ix, iy,
+                              1.0 - scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
     }
 
     void store_density(size_t layer, int64_t ix, int64_t iy, double covered_fraction) const

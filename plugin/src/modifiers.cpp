@@ -327,6 +327,17 @@ bool parse_grains_value(std::string_view v, FilmgrainCommand& cmd, std::string& 
     return true;
 }
 
+bool parse_scale_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    ScaleMethod m;
+    if (!parse_scale_method(std::string(v), m)) {
+        why = "unknown scale (known: grain|pixel)";
+        return false;
+    }
+    cmd.engine_options.scale = m;
+    return true;
+}
+
 bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     int64_t n = 0;
@@ -427,6 +438,14 @@ const Modifier kModifiers[] = {
       "kinetics=early runs the exact decisions on the kernel's grains (for measuring it)",
       [](const FilmgrainCommand&) { return engine_choice("fast with kinetics=curve, else exact"); },
       parse_grains_value },
+    { "scale", "grain|pixel",
+      "expert override: every grain simulated, or each pixel's transmittance drawn from the "
+      "Boolean model's pixel statistics (for grains far below the pixel)",
+      [](const FilmgrainCommand&) {
+          return engine_choice("pixel where every grain is under half a pixel and even fog "
+                               "develops >= 16 grains per pixel, else grain");
+      },
+      parse_scale_value },
     { "samples", "N",
       "sub-scanlines per pixel row (scanline coverage) or sample rows per pixel (raster), [1, 256]",
       [](const FilmgrainCommand&) {

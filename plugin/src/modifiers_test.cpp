@@ -153,7 +153,8 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
     const auto docs = filmgrain_modifier_docs();
     const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
-                           "photons",  "coverage", "grains",  "samples",  "tile" };
+                           "photons",  "coverage", "grains",  "scale",    "samples",
+                           "tile" };
     ASSERT_EQ(docs.size(), std::size(keys));
     for (size_t i = 0; i < docs.size(); ++i) {
         EXPECT_EQ(docs[i].key, keys[i]);
@@ -166,7 +167,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
     EXPECT_EQ(docs[0].default_text, default_preset_name());
     EXPECT_EQ(docs[2].default_text, "0.0208333 (1/48)");
     EXPECT_EQ(docs[7].default_text, engine_name(RenderSettings().engine));
-    EXPECT_EQ(docs[14].default_text, std::to_string(RenderSettings().tile_size_px));
+    EXPECT_EQ(docs[15].default_text, std::to_string(RenderSettings().tile_size_px));
 }
 
 TEST(Modifiers, OutputModifiers)

@@ -6,7 +6,7 @@ import re
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
 MODIFIERS = ["stock", "exposure", "shutter", "seed", "width_mm", "scan", "roi",
-             "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "samples",
+             "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
              "tile"]
 
 OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",

@@ -83,8 +83,19 @@ enum class GrainMethod {
             ///< quantiles (the fast kernel's; its error is reported)
 };
 
+/// At what scale a layer is simulated.
+enum class ScaleMethod {
+    grain,  ///< every grain generated and decided (MODEL.md 1-5 as written)
+    pixel,  ///< each pixel's transmittance drawn from the Boolean model's
+            ///< pixel statistics (mean, variance, neighbour correlation),
+            ///< for grains far below the pixel (Gaussian approximation,
+            ///< measured in docs/performance)
+};
+
 /// Names as used on the command line, in metadata and statistics.
 const char* engine_name(Engine engine);
+const char* scale_method_name(ScaleMethod method);
+bool parse_scale_method(const std::string& name, ScaleMethod& out);
 const char* grain_method_name(GrainMethod method);
 bool parse_grain_method(const std::string& name, GrainMethod& out);
 const char* kinetics_method_name(KineticsMethod method);
@@ -115,6 +126,7 @@ struct EngineOptions {
     std::optional<ExposureMethod> exposure_method;
     std::optional<CoverageMethod> coverage;
     std::optional<GrainMethod> grains;
+    std::optional<ScaleMethod> scale;
     /// Sub-scanlines per pixel row for scanline coverage, or sample rows per
     /// pixel for raster coverage; 0: the engine's. [0, 256].
     int coverage_samples = 0;

@@ -1,0 +1,250 @@
+// MODEL.md section 5 at pixel scale: the Boolean model's pixel statistics.
+#include "pixel_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rng.h"
+#include "sampling.h"
+
+namespace filmgrain {
+
+namespace {
+
+/// Grain sizes by quadrature over the normal score z of ln d: nodes on
+/// [-4, 4] (the mass beyond, 6e-5, is left out), Gaussian weights summing
+/// to 1.
+constexpr int kSizeNodes = 65;
+constexpr double kSizeZ  = 4.0;
+/// Distances h at which the covariance is integrated (midpoint rule on
+/// [0, largest diameter]).
+constexpr int kDistanceNodes = 256;
+/// The exposure values tabulated: log-spaced, 16 per octave, from 2^-16 to
+/// 2^12 times grey (0.18); v = 0 is its own node. A property of the scene,
+/// never of the pixels, so that every ROI uses the same table.
+constexpr double kGrey = 0.18;
+constexpr int kOctavesBelow = 16, kOctavesAbove = 12, kPerOctave = 16;
+
+/// Area shared by two discs of radius r whose centres are h apart.
+double lens_area(double h, double r)
+{
+    if (h >= 2.0 * r)
+        return 0.0;
+    return 2.0 * r * r * std::acos(h / (2.0 * r)) - 0.5 * h * std::sqrt(4.0 * r * r - h * h);
+}
+
+/// P(develop | mean photons) over every mean: the curve where it reaches,
+/// beyond it the table at the mean (Poisson spread is small there and P(N)
+/// flat: the shoulder), beyond the table its last node.
+double develop_probability(const PixelPopulation& p, double lambda)
+{
+    if (lambda <= p.curve->lambda_max())
+        return p.curve->probability(lambda);
+    const double n = std::min(lambda, static_cast<double>(p.table->max_photons()));
+    return p.table->probability(static_cast<uint64_t>(std::llround(n)));
+}
+
+/// The quadrature and the lens areas of a layer's populations, prepared once.
+class Integrator {
+public:
+    Integrator(const std::vector<PixelPopulation>& pops, double px_um, double py_um)
+        : m_pops(pops), m_px(px_um), m_py(py_um)
+    {
+        double h_max = 0.0;
+        for (const PixelPopulation& p : pops) {
+            const Population& pop = *p.population;
+            const double s        = pop.diameter_log_sigma;
+            const double mu       = std::log(pop.diameter_um) - 0.5 * s * s;
+            Sizes sz;
+            const int nodes = s > 0.0 ? kSizeNodes : 1;
+            double wsum = 0.0;
+            for (int k = 0; k < nodes; ++k) {
+                const double z = nodes > 1 ? -kSizeZ + 2.0 * kSizeZ * k / (nodes - 1) : 0.0;
+                const double w = std::exp(-0.5 * z * z);
+                const double r = 0.5 * std::exp(mu + s * z);
+                sz.r.push_back(r);
+                sz.w.push_back(w);
+                wsum += w;
+                h_max = std::max(h_max, 2.0 * r);
+            }
+            for (double& w : sz.w)
+                w /= wsum;
+            m_sizes.push_back(std::move(sz));
+        }
+        m_dh = h_max / kDistanceNodes;
+        for (Sizes& sz : m_sizes)
+            for (size_t k = 0; k < sz.r.size(); ++k)
+                for (int j = 0; j < kDistanceNodes; ++j)
+                    sz.lens.push_back(lens_area((j + 0.5) * m_dh, sz.r[k]));
+    }
+
+    PixelModel::Moments operator()(double v) const
+    {
+        PixelModel::Moments m;
+        std::vector<double> g(kDistanceNodes, 0.0);
+        double exponent = 0.0, developed = 0.0;
+        for (size_t p = 0; p < m_pops.size(); ++p) {
+            const PixelPopulation& pp = m_pops[p];
+            const Sizes& sz           = m_sizes[p];
+            const double n            = pp.population->grains_per_um2;
+            for (size_t k = 0; k < sz.r.size(); ++k) {
+                const double a  = M_PI * sz.r[k] * sz.r[k];
+                const double pd = develop_probability(pp, pp.photons_per_value_um2 * v * a);
+                const double nw = n * sz.w[k] * pd;
+                exponent += nw * a;
+                developed += nw;
+                const double* lens = &sz.lens[k * kDistanceNodes];
+                for (int j = 0; j < kDistanceNodes; ++j)
+                    g[static_cast<size_t>(j)] += nw * lens[j];
+            }
+        }
+        m.mean = std::exp(-exponent);
+        m.developed_per_pixel = developed * m_px * m_py;
+        // Pixel variance and neighbour covariances: the covariance C(h)
+        // against the overlap of a pixel with itself (or its neighbour)
+        // shifted by h, averaged over directions (valid while the largest
+        // grain is smaller than the pixel).
+        const double a2 = m_px * m_py * m_px * m_py;
+        double var = 0.0, cx = 0.0, cy = 0.0, cd = 0.0;
+        for (int j = 0; j < kDistanceNodes; ++j) {
+            const double h = (j + 0.5) * m_dh;
+            const double c = m.mean * m.mean * std::expm1(g[static_cast<size_t>(j)]);
+            var += c * 2.0 * M_PI * h
+                   * (m_px * m_py - 2.0 / M_PI * (m_px + m_py) * h + h * h / M_PI);
+            cx += c * h * (2.0 * h * m_py - h * h);
+            cy += c * h * (2.0 * h * m_px - h * h);
+            cd += c * h * h * h / 2.0;
+        }
+        m.variance = std::max(0.0, var * m_dh / a2);
+        if (m.variance > 0.0) {
+            m.rho_x  = cx * m_dh / a2 / m.variance;
+            m.rho_y  = cy * m_dh / a2 / m.variance;
+            m.rho_xy = cd * m_dh / a2 / m.variance;
+        }
+        return m;
+    }
+
+private:
+    struct Sizes {
+        std::vector<double> r, w, lens;  // lens: [size node][distance node]
+    };
+    const std::vector<PixelPopulation>& m_pops;
+    double m_px, m_py, m_dh = 0.0;
+    std::vector<Sizes> m_sizes;
+};
+
+PixelModel::Moments lerp(const PixelModel::Moments& a, const PixelModel::Moments& b, double t)
+{
+    const auto l = [t](double x, double y) { return x + t * (y - x); };
+    return { l(a.mean, b.mean), l(a.variance, b.variance), l(a.rho_x, b.rho_x),
+             l(a.rho_y, b.rho_y), l(a.rho_xy, b.rho_xy),
+             l(a.developed_per_pixel, b.developed_per_pixel) };
+}
+
+}  // namespace
+
+PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& populations,
+                                        double px_um, double py_um, double v)
+{
+    return Integrator(populations, px_um, py_um)(v);
+}
+
+PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,
+                       double py_um)
+{
+    const Integrator moments(populations, px_um, py_um);
+    const int n   = (kOctavesBelow + kOctavesAbove) * kPerOctave;
+    m_log_v0      = std::log(kGrey) - kOctavesBelow * std::log(2.0);
+    const double step = std::log(2.0) / kPerOctave;
+    m_inv_step    = 1.0 / step;
+    m_nodes.push_back(moments(0.0));
+    for (int i = 0; i <= n; ++i)
+        m_nodes.push_back(moments(std::exp(m_log_v0 + i * step)));
+    for (int i = 0; i < n; ++i) {
+        const Moments exact  = moments(std::exp(m_log_v0 + (i + 0.5) * step));
+        const Moments interp = lerp(m_nodes[static_cast<size_t>(i) + 1],
+                                    m_nodes[static_cast<size_t>(i) + 2], 0.5);
+        if (exact.mean > 0.0)
+            m_max_mean_error = std::max(m_max_mean_error,
+                                        std::fabs(interp.mean - exact.mean) / exact.mean);
+        if (exact.variance > 0.0)
+            m_max_sd_error = std::max(m_max_sd_error,
+                                      std::fabs(std::sqrt(interp.variance / exact.variance) - 1.0));
+    }
+}
+
+PixelModel::Moments PixelModel::at(double v) const
+{
+    if (!(v > 0.0))
+        return m_nodes.front();
+    const double t = (std::log(v) - m_log_v0) * m_inv_step;
+    if (t <= 0.0)
+        return m_nodes[1];
+    const size_t i = static_cast<size_t>(t);
+    if (i + 2 >= m_nodes.size())
+        return m_nodes.back();
+    return lerp(m_nodes[i + 1], m_nodes[i + 2], t - static_cast<double>(i));
+}
+
+void moving_average_taps(double rho, double taps[3])
+{
+    // Correlation of [b, 1, b] with itself shifted by one: 2 b / (1 + 2 b^2),
+    // at most 1/sqrt(2) (b = 1/sqrt(2)).
+    const double r = std::clamp(rho, -M_SQRT1_2, M_SQRT1_2);
+    const double b = std::fabs(r) < 1e-12 ? 0.0 : (1.0 - std::sqrt(1.0 - 2.0 * r * r)) / (2.0 * r);
+    const double norm = 1.0 / std::sqrt(1.0 + 2.0 * b * b);
+    taps[0] = taps[2] = b * norm;
+    taps[1] = norm;
+}
+
+double skewed_draw(double mean, double variance, double z)
+{
+    // A fraction in [0, 1] with the model's mean and variance: where most
+    // of the pixel is open (mean >= 1/2) its covered part, else its open
+    // part, is Gamma distributed: the Boolean model's few covering discs
+    // (or few remaining holes) make that part skewed to the right, with
+    // mass near 0. Gamma(shape k = m^2 / V, scale V / m) by the
+    // Wilson-Hilferty cube of a normal (z, the pixel's correlated normal:
+    // a Gaussian copula).
+    const bool open = mean >= 0.5;
+    const double m  = open ? 1.0 - mean : mean;
+    if (!(m > 0.0) || !(variance > 0.0))
+        return mean;
+    const double k = m * m / variance;
+    const double c = 1.0 / (9.0 * k);
+    const double w = std::max(0.0, 1.0 - c + z * std::sqrt(c));
+    const double g = std::min(1.0, m * w * w * w);
+    return open ? 1.0 - g : g;
+}
+
+void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x0, int64_t y0,
+                                int64_t x1, int64_t y1, const double* v, double* transmittance)
+{
+    const int64_t tw = x1 - x0, th = y1 - y0;
+    // Standard normals of the block and a one-pixel margin, each keyed by
+    // its absolute pixel.
+    const int64_t zw = tw + 2;
+    std::vector<double> z(static_cast<size_t>(zw * (th + 2)));
+    for (int64_t j = 0; j < th + 2; ++j)
+        for (int64_t i = 0; i < zw; ++i) {
+            const uint64_t id = hash_ids(key, static_cast<uint64_t>(x0 + i - 1),
+                                         static_cast<uint64_t>(y0 + j - 1));
+            const double u = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
+            z[static_cast<size_t>(j * zw + i)] = normal_quantile(u);
+        }
+    for (int64_t j = 0; j < th; ++j)
+        for (int64_t i = 0; i < tw; ++i) {
+            const size_t o = static_cast<size_t>(j * tw + i);
+            const PixelModel::Moments m = model.at(v[o]);
+            double kx[3], ky[3];
+            moving_average_taps(m.rho_x, kx);
+            moving_average_taps(m.rho_y, ky);
+            double noise = 0.0;
+            for (int dy = 0; dy < 3; ++dy)
+                for (int dx = 0; dx < 3; ++dx)
+                    noise += ky[dy] * kx[dx] * z[static_cast<size_t>((j + dy) * zw + i + dx)];
+            transmittance[o] = skewed_draw(m.mean, m.variance, noise);
+        }
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,96 @@
+// filmgrain: MODEL.md section 5 at pixel scale: the Boolean model's pixel
+// statistics, for grains far below the pixel.
+//
+// Where every pixel holds many developed grains, the positions of single
+// grains are invisible: only each pixel's transmittance and its correlation
+// with its neighbours are. For a uniformly exposed region the developed
+// discs of a layer are a Boolean model (independent populations, each a
+// Poisson field thinned by P(develop | lambda)), whose point transmittance
+// has mean  mu = exp(-sum_p n_p E[a P])  and covariance at distance h
+//   C(h) = mu^2 (exp(sum_p n_p E[P K(h; r)]) - 1),
+// K(h; r) the area shared by two discs of radius r at distance h. A pixel's
+// transmittance (its mean over the pixel) then has mean mu, variance
+//   V = (1/A^2) int C(|h|) (px - |hx|)(py - |hy|) d^2h
+// and covariance with its horizontal, vertical and diagonal neighbours from
+// the same integral with the shifted overlap. PixelModel tabulates these over
+// the exposure value v, and the pixel kernel draws each pixel from a Gamma
+// law with that mean and variance (skewed_draw) through a Gaussian copula:
+// the normal (k * z), z i.i.d. standard normals keyed by absolute pixel
+// (deterministic for any tiling), k a separable 3x3 kernel with the model's
+// neighbour correlations. Exact in mean and variance; the shape and the
+// copula's correlation are approximations, measured against the per-grain
+// kernel in docs/performance; the planner uses it only where grains are
+// many per pixel.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "develop_curve.h"
+#include "filmgrain/stock.h"
+
+namespace filmgrain {
+
+/// One population as the pixel model sees it.
+struct PixelPopulation {
+    const Population* population = nullptr;
+    /// Mean absorbed photons per (value x square micrometre).
+    double photons_per_value_um2 = 0.0;
+    /// P(develop | mean photons) and its table (for means beyond the curve).
+    const DevelopCurve* curve = nullptr;
+    const DevelopTable* table = nullptr;
+};
+
+class PixelModel {
+public:
+    struct Moments {
+        double mean = 0.0;      ///< mu: mean transmittance
+        double variance = 0.0;  ///< V: variance of a pixel's transmittance
+        double rho_x = 0.0;     ///< correlation with the horizontal neighbour
+        double rho_y = 0.0;     ///< with the vertical neighbour
+        double rho_xy = 0.0;    ///< with a diagonal neighbour
+        double developed_per_pixel = 0.0;  ///< expected developed grain centres
+    };
+
+    /// Tabulates the moments of one layer's pixels (pitch px x py um) over
+    /// exposure values: v = 0, then 16 nodes per octave from 2^-16 to 2^12
+    /// times grey (0.18); a property of the scene, never of the pixels.
+    PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um);
+
+    /// Moments at exposure value v (linear interpolation in log v; v beyond
+    /// the table: its last node).
+    Moments at(double v) const;
+
+    /// Moments computed directly (no table): for tests and the table.
+    static Moments compute(const std::vector<PixelPopulation>& populations, double px_um,
+                           double py_um, double v);
+
+    /// Largest relative error of the table's interpolation found at node
+    /// midpoints, in the mean and in the standard deviation.
+    double max_mean_error() const { return m_max_mean_error; }
+    double max_sd_error() const { return m_max_sd_error; }
+
+private:
+    double m_log_v0 = 0.0, m_inv_step = 0.0;
+    std::vector<Moments> m_nodes;  ///< node 0: v = 0
+    double m_max_mean_error = 0.0, m_max_sd_error = 0.0;
+};
+
+/// The weights [beta, 1, beta] / sqrt(1 + 2 beta^2) of a 3-tap moving
+/// average whose neighbour correlation is rho (|rho| <= 1/sqrt(2); larger
+/// values are clamped there).
+void moving_average_taps(double rho, double taps[3]);
+
+/// A pixel's transmittance from its mean and variance and its normal z:
+/// Gamma distributed in its covered part where the mean is at least 1/2,
+/// in its open part below (Wilson-Hilferty), in [0, 1].
+double skewed_draw(double mean, double variance, double z);
+
+/// Writes the transmittance of the pixels [x0, x1) x [y0, y1) of one layer,
+/// row-major into `transmittance`, given each pixel's exposure value in `v`
+/// (same layout). Normals are keyed by (key, absolute pixel), so any tiling
+/// gives the same values.
+void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x0, int64_t y0,
+                                int64_t x1, int64_t y1, const double* v, double* transmittance);
+
+}  // namespace filmgrain

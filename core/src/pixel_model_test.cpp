@@ -1,0 +1,152 @@
+// Tests of the pixel-scale model against Monte Carlo renders of the
+// Boolean model it summarises: developed discs drawn grain by grain (the
+// fast kernel's grains and curve), exact pixel coverage, and the pixel
+// transmittances' mean, variance and neighbour correlation compared with
+// PixelModel's, tolerances from the sampling variance.
+#include "pixel_model.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "grain_kernel.h"
+#include "image_formation.h"
+
+namespace filmgrain {
+namespace {
+
+struct Sample {
+    double mean = 0.0, var = 0.0, rho_x = 0.0;
+    double se_mean = 0.0, se_var = 0.0, se_rho = 0.0;
+};
+
+/// Pixel transmittances of several 48x48 blocks of 4 um pixels, grain by
+/// grain.
+Sample monte_carlo(const Population& pop, const DevelopCurve& curve, double k, double v)
+{
+    constexpr int kBlocks = 12, kN = 48;
+    constexpr double kPitch = 4.0;
+    std::vector<double> t_all;
+    double sxy = 0.0, sxx = 0.0;
+    int pairs = 0;
+    std::vector<double> means;
+    for (int b = 0; b < kBlocks; ++b) {
+        const PopulationGrains grains(pop, 100 + b, 0, 0);
+        const FastGrains fast(grains);
+        const RectUm rect { 0.0, 0.0, kN * kPitch, kN * kPitch };
+        std::vector<Disc> discs;
+        fast.for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits, uint64_t) {
+            const Disc d { x, y, r };
+            if (!disc_touches_rect(d, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
+                return;
+            const double u = (bits + 0.5) * 0x1.0p-32;
+            if (u >= 1.0 - curve.probability(k * v * M_PI * r * r))
+                discs.push_back(d);
+        });
+        std::vector<double> f(kN * kN);
+        GridCoverageScratch scratch;
+        grid_coverage(discs, 0, 0, kN, kN, kPitch, kPitch, scratch, f.data());
+        double m = 0.0;
+        for (double c : f) {
+            t_all.push_back(1.0 - c);
+            m += 1.0 - c;
+        }
+        means.push_back(m / (kN * kN));
+        for (int y = 0; y < kN; ++y)
+            for (int x = 0; x + 1 < kN; ++x) {
+                sxy += (1.0 - f[y * kN + x]) * (1.0 - f[y * kN + x + 1]);
+                ++pairs;
+            }
+    }
+    Sample s;
+    const double n = static_cast<double>(t_all.size());
+    for (double t : t_all)
+        s.mean += t / n;
+    for (double t : t_all) {
+        s.var += (t - s.mean) * (t - s.mean) / (n - 1);
+        sxx += 0.0;
+    }
+    s.rho_x = (sxy / pairs - s.mean * s.mean) / s.var;
+    // Standard errors: the mean from the spread of the block means (blocks
+    // are independent); the variance and the correlation as for n / 2
+    // independent pixels (neighbour correlation is small here, checked
+    // below), which overstates the precision by little.
+    double vb = 0.0, mb = 0.0;
+    for (double m : means)
+        mb += m / kBlocks;
+    for (double m : means)
+        vb += (m - mb) * (m - mb) / (kBlocks - 1);
+    s.se_mean = std::sqrt(vb / kBlocks);
+    s.se_var  = s.var * std::sqrt(2.0 / (n / 2));
+    s.se_rho  = 1.0 / std::sqrt(n / 2);
+    return s;
+}
+
+TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
+{
+    Stock stock;
+    const Development dev(stock);
+    DevelopTable::Options o;
+    o.max_photons           = 256;
+    o.target_standard_error = 5e-3;
+    o.stream_key            = 3;
+    const DevelopTable table({ 1e7, 1e6, 10 }, 1.0 / 48, dev, o);
+    const DevelopCurve curve(table);
+    Population pop;
+    pop.grains_per_um2     = 1.5;
+    pop.diameter_um        = 0.8;
+    pop.diameter_log_sigma = 0.3;
+    const double k = 40.0;  // photons per value um^2: ~20 per mean grain at v = 1
+    const std::vector<PixelPopulation> pops { { &pop, k, &curve, &table } };
+    for (double v : { 0.05, 0.4, 1.0 }) {
+        const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v);
+        const Sample s = monte_carlo(pop, curve, k, v);
+        EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << "v " << v;
+        EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << "v " << v;
+        EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << "v " << v;
+        EXPECT_LT(m.rho_x, 0.3);  // the n / 2 effective pixels above
+        // The table interpolates the direct computation closely.
+        const PixelModel table_model(pops, 4.0, 4.0);
+        EXPECT_NEAR(table_model.at(v).mean, m.mean, 1e-3 * m.mean);
+    }
+}
+
+TEST(PixelModel, MovingAverageTapsHaveTheirCorrelation)
+{
+    for (double rho : { 0.0, 0.05, 0.2, 0.5 }) {
+        double t[3];
+        moving_average_taps(rho, t);
+        EXPECT_NEAR(t[0] * t[0] + t[1] * t[1] + t[2] * t[2], 1.0, 1e-12);
+        EXPECT_NEAR(t[0] * t[1] + t[1] * t[2], rho, 1e-12);
+    }
+}
+
+TEST(PixelModel, SamplesAreTileIndependent)
+{
+    Stock stock;
+    const Development dev(stock);
+    DevelopTable::Options o;
+    o.max_photons = 128;
+    o.target_standard_error = 1e-2;
+    const DevelopTable table({ 1e7, 1e6, 10 }, 1.0 / 48, dev, o);
+    const DevelopCurve curve(table);
+    Population pop;
+    pop.grains_per_um2 = 2.0;
+    pop.diameter_um    = 0.6;
+    const PixelModel model({ { &pop, 50.0, &curve, &table } }, 5.0, 5.0);
+    std::vector<double> v(32 * 32), whole(32 * 32), part(16 * 16);
+    for (size_t i = 0; i < v.size(); ++i)
+        v[i] = 0.01 * static_cast<double>(i % 97);
+    sample_pixel_transmittance(model, 7, 0, 0, 32, 32, v.data(), whole.data());
+    std::vector<double> vp(16 * 16);
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            vp[y * 16 + x] = v[(y + 16) * 32 + x + 16];
+    sample_pixel_transmittance(model, 7, 16, 16, 32, 32, vp.data(), part.data());
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            EXPECT_EQ(part[y * 16 + x], whole[(y + 16) * 32 + x + 16]);
+}
+
+}  // namespace
+}  // namespace filmgrain
