@@ -22,6 +22,14 @@
 //                          pixels, discs of the paper stock (6 um, sigma
 //                          0.5) at covered fraction C/100; items = discs
 //   BM_ScanlineCoverage/C/S  scanline_coverage, S sub-scanlines; items = discs
+//   BM_RasterCoverage/C/S  raster_coverage, 64 x S points per pixel; items =
+//                          discs
+//   BM_FastKernel/D        the fast per-grain kernel's grain loop: FastGrains
+//                          generation over a 400 um square (mean diameter
+//                          D/10 um, sigma 0.35) and one DevelopCurve decision
+//                          per grain at ~20 mean photons; items = grains
+//   BM_PixelModelDraw      sample_pixel_transmittance of a 64x64 block;
+//                          items = pixels
 //
 // Inputs are generated once per benchmark from fixed seeds. Build with
 // -DFILMGRAIN_BUILD_BENCHMARKS=ON (Release); run build/bench/filmgrain_bench
@@ -33,12 +41,15 @@
 #include <memory>
 #include <vector>
 
+#include "develop_curve.h"
 #include "development.h"
 #include "exposure.h"
 #include "geometry.h"
+#include "grain_kernel.h"
 #include "image_formation.h"
 #include "kinetics.h"
 #include "kinetics_table.h"
+#include "pixel_model.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -292,6 +303,78 @@ void BM_ScanlineCoverage(benchmark::State& state)
 }
 BENCHMARK(BM_ScanlineCoverage)
     ->ArgsProduct({ { 10, 50, 80, 95 }, { 1, 4, 16 } });
+
+void BM_RasterCoverage(benchmark::State& state)
+{
+    const CoverageFixture fx(static_cast<double>(state.range(0)) / 100.0);
+    const int samples = static_cast<int>(state.range(1));
+    RasterScratch scratch;
+    std::vector<double> fraction(CoverageFixture::kBlock * CoverageFixture::kBlock);
+    for (auto _ : state) {
+        raster_coverage(fx.discs, 0, 0, CoverageFixture::kBlock, CoverageFixture::kBlock,
+                        CoverageFixture::kPitchUm, CoverageFixture::kPitchUm, samples, scratch,
+                        fraction.data());
+        benchmark::DoNotOptimize(fraction.data());
+    }
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * fx.discs.size()));
+    state.counters["discs"] = static_cast<double>(fx.discs.size());
+}
+// 8 rows: fast's 4 per radius of the 6 um discs on 6.25 um pixels; 42: auto's
+// 21 per radius at the default tolerance.
+BENCHMARK(BM_RasterCoverage)->ArgsProduct({ { 10, 50, 80, 95 }, { 8, 42 } });
+
+const DevelopTable& fast_table()
+{
+    static const DevelopTable table = [] {
+        DevelopTable::Options o;
+        o.max_photons           = 256;
+        o.target_standard_error = 5e-3;
+        return DevelopTable(kRates, kShutterS, Development(paper_like_stock()), o);
+    }();
+    return table;
+}
+
+void BM_FastKernel(benchmark::State& state)
+{
+    Population pop;
+    pop.grains_per_um2     = 0.3;
+    pop.diameter_um        = static_cast<double>(state.range(0)) / 10.0;
+    pop.diameter_log_sigma = 0.35;
+    const PopulationGrains grains(pop, 1, 0, 0);
+    const FastGrains fast(grains);
+    const DevelopCurve curve(fast_table());
+    const double k = 20.0 / grains.mean_area_um2();
+    const RectUm rect { 0.0, 0.0, 400.0, 400.0 };
+    uint64_t n = 0;
+    for (auto _ : state) {
+        uint64_t developed = 0;
+        fast.for_each_grain_near(rect, [&](double, double, double r, uint32_t bits, uint64_t) {
+            ++n;
+            developed += (bits + 0.5) * 0x1.0p-32 >= 1.0 - curve.probability(k * M_PI * r * r);
+        });
+        benchmark::DoNotOptimize(developed);
+    }
+    state.SetItemsProcessed(static_cast<int64_t>(n));
+}
+BENCHMARK(BM_FastKernel)->Arg(10)->Arg(35)->Arg(60);
+
+void BM_PixelModelDraw(benchmark::State& state)
+{
+    Population pop;
+    pop.grains_per_um2 = 12.0;
+    pop.diameter_um    = 0.5;
+    const DevelopCurve curve(fast_table());
+    const PixelModel model({ { &pop, 400.0, &curve, &fast_table() } }, 6.0, 6.0);
+    std::vector<double> v(64 * 64), t(64 * 64);
+    for (size_t i = 0; i < v.size(); ++i)
+        v[i] = 0.01 * static_cast<double>(i % 100);
+    for (auto _ : state) {
+        sample_pixel_transmittance(model, 1, 0, 0, 64, 64, v.data(), t.data());
+        benchmark::DoNotOptimize(t.data());
+    }
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 64 * 64));
+}
+BENCHMARK(BM_PixelModelDraw);
 
 }  // namespace
 }  // namespace filmgrain
