@@ -14,24 +14,14 @@
 #include "image_formation.h"
 #include "kinetics_table.h"
 #include "sampling.h"
+#include "test_tables.h"
 
 namespace filmgrain {
 namespace {
 
-DevelopTable small_table()
-{
-    Stock stock;
-    const Development dev(stock);
-    DevelopTable::Options o;
-    o.max_photons           = 256;
-    o.target_standard_error = 5e-3;
-    o.stream_key            = 3;
-    return DevelopTable({ 1e7, 1e6, 10 }, 1.0 / 48, dev, o);
-}
-
 TEST(DevelopCurve, IsThePoissonMixtureOfTheTable)
 {
-    const DevelopTable table = small_table();
+    const DevelopTable table = small_develop_table();
     const DevelopCurve curve(table);
     EXPECT_GT(curve.lambda_max(), 100.0);
     EXPECT_LT(curve.lambda_max(), 256.0);
@@ -57,7 +47,7 @@ TEST(DevelopCurve, OneUniformAgainstTheCurveDevelopsLikeSampledPhotonCounts)
     // path's (N ~ Poisson(lambda), then u >= 1 - P(N)): the fractions
     // developed of M grains each differ by a binomial sd sqrt(2 p (1 - p) / M);
     // 5 sd.
-    const DevelopTable table = small_table();
+    const DevelopTable table = small_develop_table();
     const DevelopCurve curve(table);
     constexpr int M = 200000;
     for (double lambda : { 3.0, 12.0, 40.0 }) {

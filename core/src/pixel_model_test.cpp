@@ -11,6 +11,7 @@
 
 #include "grain_kernel.h"
 #include "image_formation.h"
+#include "test_tables.h"
 
 namespace filmgrain {
 namespace {
@@ -84,13 +85,7 @@ Sample monte_carlo(const Population& pop, const DevelopCurve& curve, double k, d
 
 TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
 {
-    Stock stock;
-    const Development dev(stock);
-    DevelopTable::Options o;
-    o.max_photons           = 256;
-    o.target_standard_error = 5e-3;
-    o.stream_key            = 3;
-    const DevelopTable table({ 1e7, 1e6, 10 }, 1.0 / 48, dev, o);
+    const DevelopTable table = small_develop_table();
     const DevelopCurve curve(table);
     Population pop;
     pop.grains_per_um2     = 1.5;
@@ -123,12 +118,7 @@ TEST(PixelModel, MovingAverageTapsHaveTheirCorrelation)
 
 TEST(PixelModel, SamplesAreTileIndependent)
 {
-    Stock stock;
-    const Development dev(stock);
-    DevelopTable::Options o;
-    o.max_photons = 128;
-    o.target_standard_error = 1e-2;
-    const DevelopTable table({ 1e7, 1e6, 10 }, 1.0 / 48, dev, o);
+    const DevelopTable table = small_develop_table(128, 1e-2);
     const DevelopCurve curve(table);
     Population pop;
     pop.grains_per_um2 = 2.0;

@@ -80,16 +80,6 @@ const char* scale_method_name(ScaleMethod method)
     return method == ScaleMethod::grain ? "grain" : "pixel";
 }
 
-bool parse_scale_method(const std::string& name, ScaleMethod& out)
-{
-    for (ScaleMethod m : { ScaleMethod::grain, ScaleMethod::pixel })
-        if (name == scale_method_name(m)) {
-            out = m;
-            return true;
-        }
-    return false;
-}
-
 std::vector<std::string> engine_names() { return { "auto", "exact", "fast" }; }
 
 namespace {
@@ -125,6 +115,12 @@ bool parse_grain_method(const std::string& name, GrainMethod& out)
 {
     constexpr GrainMethod all[] = { GrainMethod::exact, GrainMethod::fast };
     return parse_by_name(name, all, grain_method_name, out);
+}
+
+bool parse_scale_method(const std::string& name, ScaleMethod& out)
+{
+    constexpr ScaleMethod all[] = { ScaleMethod::grain, ScaleMethod::pixel };
+    return parse_by_name(name, all, scale_method_name, out);
 }
 
 bool parse_exposure_method(const std::string& name, ExposureMethod& out)
