@@ -280,62 +280,50 @@ constexpr ExposureMethod kExposureMethods[] = { ExposureMethod::disc, ExposureMe
 constexpr CoverageMethod kCoverage[]
     = { CoverageMethod::exact, CoverageMethod::scanline, CoverageMethod::raster };
 
+constexpr GrainMethod kGrains[] = { GrainMethod::exact, GrainMethod::fast };
+constexpr ScaleMethod kScales[] = { ScaleMethod::grain, ScaleMethod::pixel };
+
+/// An expert override `key=NAME`: one of `all`, by the name to_name gives.
+template<typename E, size_t N>
+bool parse_choice(std::string_view v, const E (&all)[N], const char* (*to_name)(E),
+                  const char* what, std::optional<E>& out, std::string& why)
+{
+    for (E e : all)
+        if (v == to_name(e)) {
+            out = e;
+            return true;
+        }
+    why = std::string("unknown ") + what + " (known: " + names_of(all, to_name) + ")";
+    return false;
+}
+
 bool parse_kinetics_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    KineticsMethod m;
-    if (!parse_kinetics_method(std::string(v), m)) {
-        why = "unknown kinetics method (known: " + names_of(kKinetics, kinetics_method_name) + ")";
-        return false;
-    }
-    cmd.engine_options.kinetics = m;
-    return true;
+    return parse_choice(v, kKinetics, kinetics_method_name, "kinetics method",
+                        cmd.engine_options.kinetics, why);
 }
 
 bool parse_photons_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    ExposureMethod m;
-    if (!parse_exposure_method(std::string(v), m)) {
-        why = "unknown exposure sampling (known: "
-              + names_of(kExposureMethods, exposure_method_name) + ")";
-        return false;
-    }
-    cmd.engine_options.exposure_method = m;
-    return true;
+    return parse_choice(v, kExposureMethods, exposure_method_name, "exposure sampling",
+                        cmd.engine_options.exposure_method, why);
 }
 
 bool parse_coverage_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    CoverageMethod m;
-    if (!parse_coverage_method(std::string(v), m)) {
-        why = "unknown coverage method (known: " + names_of(kCoverage, coverage_method_name) + ")";
-        return false;
-    }
-    cmd.engine_options.coverage = m;
-    return true;
+    return parse_choice(v, kCoverage, coverage_method_name, "coverage method",
+                        cmd.engine_options.coverage, why);
 }
-
-constexpr GrainMethod kGrains[] = { GrainMethod::exact, GrainMethod::fast };
 
 bool parse_grains_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    GrainMethod m;
-    if (!parse_grain_method(std::string(v), m)) {
-        why = "unknown grain method (known: " + names_of(kGrains, grain_method_name) + ")";
-        return false;
-    }
-    cmd.engine_options.grains = m;
-    return true;
+    return parse_choice(v, kGrains, grain_method_name, "grain method", cmd.engine_options.grains,
+                        why);
 }
 
 bool parse_scale_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    ScaleMethod m;
-    if (!parse_scale_method(std::string(v), m)) {
-        why = "unknown scale (known: grain|pixel)";
-        return false;
-    }
-    cmd.engine_options.scale = m;
-    return true;
+    return parse_choice(v, kScales, scale_method_name, "scale", cmd.engine_options.scale, why);
 }
 
 bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
