@@ -338,25 +338,39 @@ void raster_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int
     const double inv_hx = static_cast<double>(kX) / px_um, inv_hy = static_cast<double>(S) / py_um;
     auto& bits = scratch.bits;
     bits.assign(static_cast<size_t>(tw * rows), 0);
+    // Per disc: the spans of all its rows first (a plain loop over rows that
+    // the compiler vectorises), then the bits.
+    std::vector<int64_t>& span = scratch.span;
     for (const Disc& d : discs) {
         // Sample rows (g + 0.5) hy inside (y - r, y + r), as global indices.
         const int64_t ga = std::max<int64_t>(gy0, ceil_i64((d.y_um - d.r_um) * inv_hy - 0.5));
         const int64_t gb = std::min<int64_t>(gy0 + rows - 1,
                                              floor_i64((d.y_um + d.r_um) * inv_hy - 0.5));
+        if (gb < ga)
+            continue;
+        const int64_t n = gb - ga + 1;
+        span.resize(static_cast<size_t>(2 * n));
         const double r2 = d.r_um * d.r_um;
         const double xc = d.x_um * inv_hx - 0.5;
-        for (int64_t g = ga; g <= gb; ++g) {
-            const double dy = (static_cast<double>(g) + 0.5) * hy - d.y_um;
-            const double w2 = r2 - dy * dy;
-            if (!(w2 > 0.0))
-                continue;
+        for (int64_t i = 0; i < n; ++i) {
+            // From the global row index, as every tile computes it.
+            const double dy   = (static_cast<double>(ga + i) + 0.5) * hy - d.y_um;
+            const double w2   = std::max(r2 - dy * dy, 0.0);
             const double half = std::sqrt(w2) * inv_hx;
-            // Sample columns (k + 0.5) hx inside [x - half, x + half].
-            const int64_t ka = std::max<int64_t>(gx0, ceil_i64(xc - half)) - gx0;
-            const int64_t kb = std::min<int64_t>(gx0 + cols - 1, floor_i64(xc + half)) - gx0;
+            // Sample columns (k + 0.5) hx inside [x - half, x + half]; an
+            // empty span (w2 = 0 at the pole) gives ka > kb below.
+            const double a = xc - half, b = xc + half;
+            const int64_t ia = static_cast<int64_t>(a), ib = static_cast<int64_t>(b);
+            span[static_cast<size_t>(2 * i)]     = ia + (static_cast<double>(ia) < a);  // ceil
+            span[static_cast<size_t>(2 * i + 1)] = ib - (static_cast<double>(ib) > b);  // floor
+        }
+        for (int64_t i = 0; i < n; ++i) {
+            const int64_t ka = std::max<int64_t>(gx0, span[static_cast<size_t>(2 * i)]) - gx0;
+            const int64_t kb
+                = std::min<int64_t>(gx0 + cols - 1, span[static_cast<size_t>(2 * i + 1)]) - gx0;
             if (kb < ka)
                 continue;
-            uint64_t* row = bits.data() + (g - gy0) * tw;
+            uint64_t* row = bits.data() + (ga + i - gy0) * tw;
             const int64_t wa = ka >> 6, wb = kb >> 6;
             const uint64_t ma = ~uint64_t(0) << (ka & 63);
             const uint64_t mb = ~uint64_t(0) >> (63 - (kb & 63));

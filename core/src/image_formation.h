@@ -63,6 +63,7 @@ void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, i
 struct RasterScratch {
     std::vector<uint64_t> bits;
     std::vector<int> count;
+    std::vector<int64_t> span;
 };
 
 /// Covered fraction of each pixel of the block [x0, x1) x [y0, y1) of a
