@@ -49,6 +49,7 @@ DevelopCurve::DevelopCurve(const DevelopTable& table, int nodes)
     nodes        = std::max(nodes, 2);
     const double step = std::sqrt(m_lambda_max) / nodes;
     m_inv_step        = step > 0.0 ? 1.0 / step : 0.0;
+    m_t_max = static_cast<double>(nodes);
     m_p.resize(static_cast<size_t>(nodes) + 2);
     for (int i = 0; i <= nodes; ++i) {
         const double s = step * i;

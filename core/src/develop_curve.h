@@ -13,6 +13,7 @@
 // reported with the table's.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -34,10 +35,11 @@ public:
     double lambda_max() const { return m_lambda_max; }
 
     /// P(develop | lambda) for 0 <= lambda <= lambda_max(): linear
-    /// interpolation between nodes in sqrt(lambda).
+    /// interpolation between nodes in sqrt(lambda). (Larger means read the
+    /// last node: callers must not rely on it, see lambda_max().)
     double probability(double lambda) const
     {
-        const double t = std::sqrt(lambda) * m_inv_step;
+        const double t = std::min(std::sqrt(lambda) * m_inv_step, m_t_max);
         const size_t i = static_cast<size_t>(t);
         const double f = t - static_cast<double>(i);
         return m_p[i] + f * (m_p[i + 1] - m_p[i]);
@@ -55,6 +57,7 @@ public:
 private:
     double m_lambda_max = 0.0;
     double m_inv_step   = 0.0;
+    double m_t_max      = 0.0;  ///< the last node's index
     double m_max_error  = 0.0;
     /// P at the nodes, plus a copy of the last one (so that lambda_max()
     /// itself interpolates without a bounds check).

@@ -33,16 +33,17 @@ double lens_area(double h, double r)
     return 2.0 * r * r * std::acos(h / (2.0 * r)) - 0.5 * h * std::sqrt(4.0 * r * r - h * h);
 }
 
-/// P(develop | mean photons) over every mean: the curve where it reaches,
-/// beyond it the table at the mean (Poisson spread is small there and P(N)
-/// flat: the shoulder), beyond the table its last node.
-double develop_probability(const PixelPopulation& p, double lambda)
+}  // namespace
+
+double pixel_develop_probability(const PixelPopulation& p, double lambda)
 {
     if (lambda <= p.curve->lambda_max())
         return p.curve->probability(lambda);
     const double n = std::min(lambda, static_cast<double>(p.table->max_photons()));
     return p.table->probability(static_cast<uint64_t>(std::llround(n)));
 }
+
+namespace {
 
 /// The quadrature and the lens areas of a layer's populations, prepared once.
 class Integrator {
@@ -89,7 +90,7 @@ public:
             const double n            = pp.population->grains_per_um2;
             for (size_t k = 0; k < sz.r.size(); ++k) {
                 const double a  = M_PI * sz.r[k] * sz.r[k];
-                const double pd = develop_probability(pp, pp.photons_per_value_um2 * v * a);
+                const double pd = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a);
                 const double nw = n * sz.w[k] * pd;
                 exponent += nw * a;
                 developed += nw;

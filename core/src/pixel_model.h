@@ -41,6 +41,12 @@ struct PixelPopulation {
     const DevelopTable* table = nullptr;
 };
 
+/// P(develop | mean photons) over every mean, as the pixel model uses it:
+/// the curve where it reaches, beyond it the table at the mean (the Poisson
+/// spread is small there and P(N) flat: the shoulder), beyond the table its
+/// last node.
+double pixel_develop_probability(const PixelPopulation& p, double lambda);
+
 class PixelModel {
 public:
     struct Moments {

@@ -23,7 +23,7 @@ struct Sample {
 
 /// Pixel transmittances of several 48x48 blocks of 4 um pixels, grain by
 /// grain.
-Sample monte_carlo(const Population& pop, const DevelopCurve& curve, double k, double v)
+Sample monte_carlo(const PixelPopulation& pp, double v)
 {
     constexpr int kBlocks = 12, kN = 48;
     constexpr double kPitch = 4.0;
@@ -32,7 +32,7 @@ Sample monte_carlo(const Population& pop, const DevelopCurve& curve, double k, d
     int pairs = 0;
     std::vector<double> means;
     for (int b = 0; b < kBlocks; ++b) {
-        const PopulationGrains grains(pop, 100 + b, 0, 0);
+        const PopulationGrains grains(*pp.population, 100 + b, 0, 0);
         const FastGrains fast(grains);
         const RectUm rect { 0.0, 0.0, kN * kPitch, kN * kPitch };
         std::vector<Disc> discs;
@@ -41,7 +41,7 @@ Sample monte_carlo(const Population& pop, const DevelopCurve& curve, double k, d
             if (!disc_touches_rect(d, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                 return;
             const double u = (bits + 0.5) * 0x1.0p-32;
-            if (u >= 1.0 - curve.probability(k * v * M_PI * r * r))
+            if (u >= 1.0 - pixel_develop_probability(pp, pp.photons_per_value_um2 * v * M_PI * r * r))
                 discs.push_back(d);
         });
         std::vector<double> f(kN * kN);
@@ -95,7 +95,7 @@ TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
     const std::vector<PixelPopulation> pops { { &pop, k, &curve, &table } };
     for (double v : { 0.05, 0.4, 1.0 }) {
         const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v);
-        const Sample s = monte_carlo(pop, curve, k, v);
+        const Sample s = monte_carlo(pops[0], v);
         EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << "v " << v;
         EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << "v " << v;
         EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << "v " << v;
