@@ -416,8 +416,7 @@ const Modifier kModifiers[] = {
       "expert override: exact pixel coverage, chord unions on sub-scanlines, or a raster of 64 "
       "points across a pixel and `samples` rows down it",
       [](const FilmgrainCommand&) {
-          return engine_choice("raster with kinetics=curve where its rows resolve the grains, "
-                               "else exact; fast: raster");
+          return engine_choice("raster with kinetics=curve, else exact; fast: raster");
       },
       parse_coverage_value },
     { "grains", "exact|fast",
@@ -430,7 +429,7 @@ const Modifier kModifiers[] = {
       "expert override: every grain simulated, or each pixel's transmittance drawn from the "
       "Boolean model's pixel statistics (for grains far below the pixel)",
       [](const FilmgrainCommand&) {
-          return engine_choice("pixel where every grain is under half a pixel and even fog "
+          return engine_choice("pixel where every grain is under a pixel and even fog "
                                "develops >= 16 grains per pixel, else grain");
       },
       parse_scale_value },
@@ -438,7 +437,8 @@ const Modifier kModifiers[] = {
       "sub-scanlines per pixel row (scanline coverage) or sample rows per pixel (raster), [1, 256]",
       [](const FilmgrainCommand&) {
           return engine_choice("scanline: 2 chords per smallest mean grain radius; raster: rows "
-                               "for the tolerance, 15 per smallest mean radius at 0.002 (fast: 4)");
+                               "for the tolerance, 21 per smallest mean radius at 0.002, at "
+                               "most 256 (fast: 4)");
       },
       parse_samples },
     { "tile", "N", "work tile side in scan pixels, [1, 4096]; speed only, never the output",
