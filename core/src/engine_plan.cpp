@@ -182,11 +182,13 @@ constexpr double kRasterShare = 0.25;
 
 /// Developed grain centres per pixel, at zero exposure (fog), that the
 /// pixel scale needs (auto): below, the per-grain kernel runs. Measured
-/// (docs/performance): with 26 (tools/perf/stocks/real-scale.json, 6.25 um
-/// pixels) its mean density is within 0.002 of the per-grain kernel's up
-/// to D = 2.2; with 5 (fine-color) within 0.003 up to D = 1.
-
-constexpr double kMinDevelopedPerPixel = 16.0;
+/// against the per-grain kernel (docs/performance/pixel_scale*.md, 8 seeds
+/// of the wedge) at 3.9 and 5.2 (fine-color at 5.46 and 6.25 um pixels)
+/// and 26 (real-scale) developed per pixel at fog: mean density within its
+/// CI of the kernel's up to D = 2.2 (-0.004 +- 0.003 at D = 1.45 with 3.9),
+/// pixel density sd 3-8% low above D ~ 0.7. The floor is the smallest
+/// measured; fewer per pixel is not measured.
+constexpr double kMinDevelopedPerPixel = 3.9;
 
 /// Rows of raster coverage per pixel (its points across a pixel are 64):
 /// enough rows across the smallest mean grain radius for the tolerance, at
@@ -577,7 +579,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                "(interpolation error: mean "
             << format_g(plan.pixel_model->max_mean_error()) << ", sd "
             << format_g(plan.pixel_model->max_sd_error())
-            << "), Gaussian with neighbour correlation; ";
+            << "), a Gamma law through a Gaussian copula with the neighbour correlations; ";
         plan.reason += why.str();
     }
 

@@ -430,7 +430,7 @@ const Modifier kModifiers[] = {
       "Boolean model's pixel statistics (for grains far below the pixel)",
       [](const FilmgrainCommand&) {
           return engine_choice("pixel where every grain is under a pixel and even fog "
-                               "develops >= 16 grains per pixel, else grain");
+                               "develops >= 3.9 grains per pixel, else grain");
       },
       parse_scale_value },
     { "samples", "N",
