@@ -726,6 +726,7 @@ def main(argv=None):
         configs = [c for c in configs if c.family == "engine"]
     if args.configs:
         want = set(args.configs.split(","))
+        want |= {c.reference for c in configs if c.name in want}  # what they are compared with
         configs = [c for c in configs if c.name in want or c.name == "exact"]
     if args.extra_auto:
         for c in configs:
