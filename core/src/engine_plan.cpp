@@ -353,7 +353,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                     << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
                        "so no table: the chain runs until each outcome is decided; ";
             }
-            if (want == KineticsMethod::table && v_max[l] <= 0.0) {
+            if (want == KineticsMethod::table && v_max[l] <= 0.0
+                && settings.scale != ScaleMethod::pixel) {
                 want = KineticsMethod::early_stop;
                 why << "population " << p << ": no light reaches it: fog only; ";
             }
@@ -536,8 +537,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     // Scale (MODEL.md 5 at pixel scale): a layer whose grains all run the
     // kernel is drawn from its pixel statistics where they describe it:
     // every grain (to z = 4) smaller than the pixel, and enough
-    // developed grains per pixel even at zero exposure (fog) for the
-    // Gaussian approximation (measured in docs/performance).
+    // developed grains per pixel even at zero exposure (fog) for its
+    // Gamma law (measured in docs/performance).
     for (size_t l = 0; l < out.size() && !exact; ++l) {
         LayerPlan& plan = out[l];
         const Layer& layer = stock.layers[l];
@@ -547,8 +548,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             continue;
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
-                                  "' has a population whose P(develop) depends on grain size "
-                                  "(rate_area_exponent != 0): it needs scale=grain");
+                                  "' needs P(develop | mean photons) for every population, which "
+                                  "kinetics=chain|early|table, grains=exact and populations with "
+                                  "rate_area_exponent != 0 do not have: use scale=grain");
         double largest_um = 0.0;
         for (const Population& pop : layer.populations)
             largest_um = std::max(largest_um, std::exp(std::log(pop.diameter_um)
