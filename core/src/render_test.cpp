@@ -262,6 +262,45 @@ TEST(Render, ZeroExposureDevelopsFogOnly)
     }
 }
 
+TEST(Render, PixelScaleOfABlackFrameIsTheFogsBooleanModel)
+{
+    // scale=pixel on a black frame: every grain develops with probability
+    // f, so the mean transmittance is exp(-f sum_p n_p a_mean_p) (MODEL.md
+    // 5). The mean over the frame's pixels has the pixels' spread over
+    // sqrt(pixels) as its standard error (neighbour correlation is small
+    // at 25 um pixels and 3-3.5 um grains); 5 of them.
+    Scene s = small_scene();
+    std::fill(s.pixels.begin(), s.pixels.end(), 0.0f);
+    RenderSettings settings;
+    settings.scale = ScaleMethod::pixel;
+    RenderStats stats;
+    const std::vector<float> d = render(s, settings, &stats);
+    const double f = 1 - std::exp(-s.stock.development_time_s / s.stock.fog_tau_s);
+    const size_t nl = s.stock.layers.size();
+    for (size_t l = 0; l < nl; ++l) {
+        EXPECT_NE(stats.layers[l].path.find("scale=pixel"), std::string::npos);
+        double exponent = 0.0;
+        for (const Population& pop : s.stock.layers[l].populations)
+            exponent += f * pop.grains_per_um2 * M_PI / 4.0 * pop.diameter_um * pop.diameter_um
+                        * std::exp(pop.diameter_log_sigma * pop.diameter_log_sigma);
+        double sum = 0.0, sum2 = 0.0;
+        const size_t n = d.size() / nl;
+        for (size_t i = 0; i < n; ++i) {
+            const double t = std::pow(10.0, -(d[i * nl + l] - s.stock.base_density));
+            sum += t;
+            sum2 += t * t;
+        }
+        const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
+        EXPECT_NEAR(mean, std::exp(-exponent), 5 * se) << s.stock.layers[l].name;
+    }
+    // A path without P(develop | mean photons) cannot run at pixel scale.
+    settings.kinetics = KineticsMethod::table;
+    std::vector<float> out(d.size());
+    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("scale=grain"), std::string::npos) << st.message();
+}
+
 TEST(Render, RejectsBadRequests)
 {
     const Scene s = small_scene();
