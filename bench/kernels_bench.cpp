@@ -364,7 +364,8 @@ void BM_PixelModelDraw(benchmark::State& state)
     pop.grains_per_um2 = 12.0;
     pop.diameter_um    = 0.5;
     const DevelopCurve curve(fast_table());
-    const PixelModel model({ { &pop, 400.0, &curve, &fast_table() } }, 6.0, 6.0);
+    const PopulationGrains grains(pop, 1, 0, 0);
+    const PixelModel model({ { &pop, &grains, 400.0, &curve, &fast_table() } }, 6.0, 6.0);
     std::vector<double> v(64 * 64), t(64 * 64);
     for (size_t i = 0; i < v.size(); ++i)
         v[i] = 0.01 * static_cast<double>(i % 100);

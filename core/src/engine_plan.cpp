@@ -216,6 +216,13 @@ double raster_bias(int rows, double pitch_um, double smallest_radius_um)
     return 0.52 * std::pow(rows_per_radius, -2.3);
 }
 
+/// Whether every population of a layer runs the fast kernel's curve.
+bool all_curves(const LayerPlan& plan)
+{
+    return std::all_of(plan.populations.begin(), plan.populations.end(),
+                       [](const PopulationPlan& p) { return p.curve != nullptr; });
+}
+
 std::string format_g(double v)
 {
     std::ostringstream o;
@@ -521,9 +528,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
         const int samples = raster_samples(std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
                                            smallest_radius_um, settings.tolerance, fast);
-        const bool kernel = std::all_of(plan.populations.begin(), plan.populations.end(),
-                                        [](const PopulationPlan& p) { return p.curve != nullptr; });
-        if (!settings.coverage && (kernel || fast))
+        if (!settings.coverage && (all_curves(plan) || fast))
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
             continue;
@@ -542,8 +547,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     for (size_t l = 0; l < out.size() && !exact; ++l) {
         LayerPlan& plan = out[l];
         const Layer& layer = stock.layers[l];
-        const bool curves = std::all_of(plan.populations.begin(), plan.populations.end(),
-                                        [](const PopulationPlan& p) { return p.curve != nullptr; });
+        const bool curves = all_curves(plan);
         if (settings.scale == ScaleMethod::grain || (!settings.scale && !curves))
             continue;
         if (!curves)
@@ -552,18 +556,16 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                                   "kinetics=chain|early|table, grains=exact and populations with "
                                   "rate_area_exponent != 0 do not have: use scale=grain");
         double largest_um = 0.0;
-        for (const Population& pop : layer.populations)
-            largest_um = std::max(largest_um, std::exp(std::log(pop.diameter_um)
-                                                       - 0.5 * pop.diameter_log_sigma
-                                                             * pop.diameter_log_sigma
-                                                       + 4.0 * pop.diameter_log_sigma));
+        for (const PopulationPlan& pp : plan.populations)
+            largest_um = std::max(largest_um, 2.0 * pp.grains.radius_at_z_um(4.0));
         const double pitch_um = std::min(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
         if (!settings.scale && largest_um > pitch_um)
             continue;
         const auto t0 = std::chrono::steady_clock::now();
         std::vector<PixelPopulation> pops;
         for (size_t p = 0; p < plan.populations.size(); ++p)
-            pops.push_back({ &layer.populations[p], plan.populations[p].photons_per_value_um2,
+            pops.push_back({ &layer.populations[p], &plan.populations[p].grains,
+                             plan.populations[p].photons_per_value_um2,
                              plan.populations[p].curve.get(), plan.populations[p].table.get() });
         auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
                                                         frame.scan_pitch_y_um);

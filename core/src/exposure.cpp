@@ -79,6 +79,26 @@ double LayerExposure::value_at(double x_um, double y_um) const
     return value(static_cast<int64_t>(fx), static_cast<int64_t>(fy));
 }
 
+double LayerExposure::mean_over_rect(double x0_um, double y0_um, double x1_um,
+                                     double y1_um) const
+{
+    const double p  = m_pitch_um;
+    const double w  = static_cast<double>(m_input.frame_width());
+    const double h  = static_cast<double>(m_input.frame_height());
+    const double fx1 = std::min(std::ceil(x1_um / p), w), fy1 = std::min(std::ceil(y1_um / p), h);
+    double sum = 0.0;
+    for (double fy = std::max(std::floor(y0_um / p), 0.0); fy < fy1; ++fy) {
+        const double oy = std::min(y1_um, (fy + 1) * p) - std::max(y0_um, fy * p);
+        for (double fx = std::max(std::floor(x0_um / p), 0.0); fx < fx1; ++fx) {
+            const double ox = std::min(x1_um, (fx + 1) * p) - std::max(x0_um, fx * p);
+            if (ox > 0.0 && oy > 0.0)
+                sum += ox * oy * value(static_cast<int64_t>(fx), static_cast<int64_t>(fy));
+        }
+    }
+    const double area = (x1_um - x0_um) * (y1_um - y0_um);
+    return area > 0.0 ? sum / area : 0.0;
+}
+
 double LayerExposure::integrate_over_disc(double cx_um, double cy_um, double r_um) const
 {
     const double p = m_pitch_um;

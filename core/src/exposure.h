@@ -61,6 +61,11 @@ public:
     /// v at the input pixel containing a point (0 outside the image).
     double value_at(double x_um, double y_um) const;
 
+    /// Mean of v over the rectangle [x0, x1] x [y0, y1] (box-reconstructed
+    /// image, 0 outside it): the input pixels it overlaps, weighted by the
+    /// overlap.
+    double mean_over_rect(double x0_um, double y0_um, double x1_um, double y1_um) const;
+
 private:
     ImageView m_input;
     std::array<double, 3> m_sensitivity;

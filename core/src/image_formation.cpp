@@ -359,10 +359,8 @@ void raster_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int
             const double half = std::sqrt(w2) * inv_hx;
             // Sample columns (k + 0.5) hx inside [x - half, x + half]; an
             // empty span (w2 = 0 at the pole) gives ka > kb below.
-            const double a = xc - half, b = xc + half;
-            const int64_t ia = static_cast<int64_t>(a), ib = static_cast<int64_t>(b);
-            span[static_cast<size_t>(2 * i)]     = ia + (static_cast<double>(ia) < a);  // ceil
-            span[static_cast<size_t>(2 * i + 1)] = ib - (static_cast<double>(ib) > b);  // floor
+            span[static_cast<size_t>(2 * i)]     = ceil_i64(xc - half);
+            span[static_cast<size_t>(2 * i + 1)] = floor_i64(xc + half);
         }
         for (int64_t i = 0; i < n; ++i) {
             const int64_t ka = std::max<int64_t>(gx0, span[static_cast<size_t>(2 * i)]) - gx0;

@@ -26,11 +26,12 @@ constexpr double kGrey = 0.18;
 constexpr int kOctavesBelow = 16, kOctavesAbove = 12, kPerOctave = 16;
 
 /// Area shared by two discs of radius r whose centres are h apart.
-double lens_area(double h, double r)
+double lens_area_um2(double h_um, double r_um)
 {
-    if (h >= 2.0 * r)
+    if (h_um >= 2.0 * r_um)
         return 0.0;
-    return 2.0 * r * r * std::acos(h / (2.0 * r)) - 0.5 * h * std::sqrt(4.0 * r * r - h * h);
+    return 2.0 * r_um * r_um * std::acos(h_um / (2.0 * r_um))
+           - 0.5 * h_um * std::sqrt(4.0 * r_um * r_um - h_um * h_um);
 }
 
 }  // namespace
@@ -49,34 +50,31 @@ namespace {
 class Integrator {
 public:
     Integrator(const std::vector<PixelPopulation>& pops, double px_um, double py_um)
-        : m_pops(pops), m_px(px_um), m_py(py_um)
+        : m_pops(pops), m_px_um(px_um), m_py_um(py_um)
     {
-        double h_max = 0.0;
+        double h_max_um = 0.0;
         for (const PixelPopulation& p : pops) {
-            const Population& pop = *p.population;
-            const double s        = pop.diameter_log_sigma;
-            const double mu       = std::log(pop.diameter_um) - 0.5 * s * s;
             Sizes sz;
-            const int nodes = s > 0.0 ? kSizeNodes : 1;
+            const int nodes = p.population->diameter_log_sigma > 0.0 ? kSizeNodes : 1;
             double wsum = 0.0;
             for (int k = 0; k < nodes; ++k) {
-                const double z = nodes > 1 ? -kSizeZ + 2.0 * kSizeZ * k / (nodes - 1) : 0.0;
-                const double w = std::exp(-0.5 * z * z);
-                const double r = 0.5 * std::exp(mu + s * z);
-                sz.r.push_back(r);
+                const double z    = nodes > 1 ? -kSizeZ + 2.0 * kSizeZ * k / (nodes - 1) : 0.0;
+                const double w    = std::exp(-0.5 * z * z);
+                const double r_um = p.grains->radius_at_z_um(z);
+                sz.r_um.push_back(r_um);
                 sz.w.push_back(w);
                 wsum += w;
-                h_max = std::max(h_max, 2.0 * r);
+                h_max_um = std::max(h_max_um, 2.0 * r_um);
             }
             for (double& w : sz.w)
                 w /= wsum;
             m_sizes.push_back(std::move(sz));
         }
-        m_dh = h_max / kDistanceNodes;
+        m_dh_um = h_max_um / kDistanceNodes;
         for (Sizes& sz : m_sizes)
-            for (size_t k = 0; k < sz.r.size(); ++k)
+            for (size_t k = 0; k < sz.r_um.size(); ++k)
                 for (int j = 0; j < kDistanceNodes; ++j)
-                    sz.lens.push_back(lens_area((j + 0.5) * m_dh, sz.r[k]));
+                    sz.lens_um2.push_back(lens_area_um2((j + 0.5) * m_dh_um, sz.r_um[k]));
     }
 
     PixelModel::Moments operator()(double v) const
@@ -88,49 +86,49 @@ public:
             const PixelPopulation& pp = m_pops[p];
             const Sizes& sz           = m_sizes[p];
             const double n            = pp.population->grains_per_um2;
-            for (size_t k = 0; k < sz.r.size(); ++k) {
-                const double a  = M_PI * sz.r[k] * sz.r[k];
-                const double pd = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a);
+            for (size_t k = 0; k < sz.r_um.size(); ++k) {
+                const double a_um2 = M_PI * sz.r_um[k] * sz.r_um[k];
+                const double pd = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
                 const double nw = n * sz.w[k] * pd;
-                exponent += nw * a;
+                exponent += nw * a_um2;
                 developed += nw;
-                const double* lens = &sz.lens[k * kDistanceNodes];
+                const double* lens = &sz.lens_um2[k * kDistanceNodes];
                 for (int j = 0; j < kDistanceNodes; ++j)
                     g[static_cast<size_t>(j)] += nw * lens[j];
             }
         }
         m.mean = std::exp(-exponent);
-        m.developed_per_pixel = developed * m_px * m_py;
+        m.developed_per_pixel = developed * m_px_um * m_py_um;
         // Pixel variance and neighbour covariances: the covariance C(h)
         // against the overlap of a pixel with itself (or its neighbour)
         // shifted by h, averaged over directions (valid while the largest
         // grain is smaller than the pixel).
-        const double a2 = m_px * m_py * m_px * m_py;
+        const double px = m_px_um, py = m_py_um, dh = m_dh_um;
+        const double a2 = px * py * px * py;
         double var = 0.0, cx = 0.0, cy = 0.0, cd = 0.0;
         for (int j = 0; j < kDistanceNodes; ++j) {
-            const double h = (j + 0.5) * m_dh;
+            const double h = (j + 0.5) * dh;  // micrometres
             const double c = m.mean * m.mean * std::expm1(g[static_cast<size_t>(j)]);
-            var += c * 2.0 * M_PI * h
-                   * (m_px * m_py - 2.0 / M_PI * (m_px + m_py) * h + h * h / M_PI);
-            cx += c * h * (2.0 * h * m_py - h * h);
-            cy += c * h * (2.0 * h * m_px - h * h);
+            var += c * 2.0 * M_PI * h * (px * py - 2.0 / M_PI * (px + py) * h + h * h / M_PI);
+            cx += c * h * (2.0 * h * py - h * h);
+            cy += c * h * (2.0 * h * px - h * h);
             cd += c * h * h * h / 2.0;
         }
-        m.variance = std::max(0.0, var * m_dh / a2);
+        m.variance = std::max(0.0, var * dh / a2);
         if (m.variance > 0.0) {
-            m.rho_x  = cx * m_dh / a2 / m.variance;
-            m.rho_y  = cy * m_dh / a2 / m.variance;
-            m.rho_xy = cd * m_dh / a2 / m.variance;
+            m.rho_x  = cx * dh / a2 / m.variance;
+            m.rho_y  = cy * dh / a2 / m.variance;
+            m.rho_xy = cd * dh / a2 / m.variance;
         }
         return m;
     }
 
 private:
     struct Sizes {
-        std::vector<double> r, w, lens;  // lens: [size node][distance node]
+        std::vector<double> r_um, w, lens_um2;  // lens_um2: [size node][distance node]
     };
     const std::vector<PixelPopulation>& m_pops;
-    double m_px, m_py, m_dh = 0.0;
+    double m_px_um, m_py_um, m_dh_um = 0.0;
     std::vector<Sizes> m_sizes;
 };
 

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "develop_curve.h"
+#include "geometry.h"
 #include "filmgrain/stock.h"
 
 namespace filmgrain {
@@ -34,6 +35,8 @@ namespace filmgrain {
 /// One population as the pixel model sees it.
 struct PixelPopulation {
     const Population* population = nullptr;
+    /// Its grain process (the disc radius at each size quantile).
+    const PopulationGrains* grains = nullptr;
     /// Mean absorbed photons per (value x square micrometre).
     double photons_per_value_um2 = 0.0;
     /// P(develop | mean photons) and its table (for means beyond the curve).

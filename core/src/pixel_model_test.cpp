@@ -28,7 +28,7 @@ Sample monte_carlo(const PixelPopulation& pp, double v)
     constexpr int kBlocks = 12, kN = 48;
     constexpr double kPitch = 4.0;
     std::vector<double> t_all;
-    double sxy = 0.0, sxx = 0.0;
+    double sxy = 0.0;
     int pairs = 0;
     std::vector<double> means;
     for (int b = 0; b < kBlocks; ++b) {
@@ -63,10 +63,8 @@ Sample monte_carlo(const PixelPopulation& pp, double v)
     const double n = static_cast<double>(t_all.size());
     for (double t : t_all)
         s.mean += t / n;
-    for (double t : t_all) {
+    for (double t : t_all)
         s.var += (t - s.mean) * (t - s.mean) / (n - 1);
-        sxx += 0.0;
-    }
     s.rho_x = (sxy / pairs - s.mean * s.mean) / s.var;
     // Standard errors: the mean from the spread of the block means (blocks
     // are independent); the variance and the correlation as for n / 2
@@ -92,7 +90,8 @@ TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
     pop.diameter_um        = 0.8;
     pop.diameter_log_sigma = 0.3;
     const double k = 40.0;  // photons per value um^2: ~20 per mean grain at v = 1
-    const std::vector<PixelPopulation> pops { { &pop, k, &curve, &table } };
+    const PopulationGrains grains(pop, 1, 0, 0);
+    const std::vector<PixelPopulation> pops { { &pop, &grains, k, &curve, &table } };
     for (double v : { 0.05, 0.4, 1.0 }) {
         const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v);
         const Sample s = monte_carlo(pops[0], v);
@@ -123,7 +122,8 @@ TEST(PixelModel, SamplesAreTileIndependent)
     Population pop;
     pop.grains_per_um2 = 2.0;
     pop.diameter_um    = 0.6;
-    const PixelModel model({ { &pop, 50.0, &curve, &table } }, 5.0, 5.0);
+    const PopulationGrains grains(pop, 1, 0, 0);
+    const PixelModel model({ { &pop, &grains, 50.0, &curve, &table } }, 5.0, 5.0);
     std::vector<double> v(32 * 32), whole(32 * 32), part(16 * 16);
     for (size_t i = 0; i < v.size(); ++i)
         v[i] = 0.01 * static_cast<double>(i % 97);

@@ -192,6 +192,8 @@ struct TileScratch {
     RasterScratch raster;
     ExposurePlane plane;
     std::vector<double> values;
+    /// Grains visited, for the stop check (poll_stop).
+    uint32_t grains_seen = 0;
 };
 
 /// What happened to one grain.
@@ -245,11 +247,13 @@ public:
                     }
                     FastCounts c;
                     if (pop.exposure == ExposureMethod::centre)
-                        develop_fast(pop, rect, scratch.discs, c, [&](double x, double y, double r) {
+                        develop_fast(pop, rect, scratch.discs, scratch.grains_seen, c,
+                                     [&](double x, double y, double r) {
                             return scratch.plane.at(x, y) * r * r * M_PI;
                         });
                     else
-                        develop_fast(pop, rect, scratch.discs, c, [&](double x, double y, double r) {
+                        develop_fast(pop, rect, scratch.discs, scratch.grains_seen, c,
+                                     [&](double x, double y, double r) {
                             return layer.exposure.integrate_over_disc(x, y, r);
                         });
                     grains += c.grains;
@@ -259,7 +263,7 @@ public:
                     continue;
                 }
                 pop.grains.for_each_grain_near(rect, [&](const Grain& g) {
-                    poll_stop();
+                    poll_stop(scratch.grains_seen);
                     const Disc disc { g.x_um, g.y_um, g.radius_um };
                     if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                         return;
@@ -335,9 +339,9 @@ private:
 
     /// Leaves the tile (throws Stopped) once the render is stopped; looks
     /// at the flag every 4096 grains (a few microseconds of work apart).
-    void poll_stop() const
+    /// `count`: the worker's grain counter (TileScratch::grains_seen).
+    void poll_stop(uint32_t& count) const
     {
-        thread_local uint32_t count = 0;
         if ((++count & 4095u) == 0 && m_stop.load(std::memory_order_relaxed))
             throw Stopped {};
     }
@@ -354,7 +358,7 @@ private:
     /// Developed discs that touch the tile are appended to `discs`.
     template<typename Integral>
     void develop_fast(const PopulationPlan& pop, const RectUm& rect, std::vector<Disc>& discs,
-                      FastCounts& c, Integral&& integral) const
+                      uint32_t& grains_seen, FastCounts& c, Integral&& integral) const
     {
         // Without a curve (grains=fast asked for with other kinetics) every
         // grain takes the population's own decision.
@@ -363,7 +367,7 @@ private:
         const double k            = pop.photons_per_value_um2;
         pop.fast->for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits,
                                                 uint64_t id) {
-            poll_stop();
+            poll_stop(grains_seen);
             const Disc disc { x, y, r };
             if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                 return;
@@ -462,29 +466,11 @@ private:
         const LayerPlan& plan = m_layers[layer];
         scratch.fraction.resize(static_cast<size_t>(tw * th));
         scratch.values.resize(static_cast<size_t>(tw * th));
-        const double p = m_frame.input_pitch_um;
-        const double w = static_cast<double>(m_frame.input_width);
-        const double h = static_cast<double>(m_frame.input_height);
         for (int64_t iy = y0; iy < y1; ++iy)
             for (int64_t ix = x0; ix < x1; ++ix) {
                 const RectUm r = m_frame.scan_rect(ix, iy, ix + 1, iy + 1);
-                const double fx0 = std::floor(r.x0_um / p), fy0 = std::floor(r.y0_um / p);
-                const double fx1 = std::min(std::ceil(r.x1_um / p), w);
-                const double fy1 = std::min(std::ceil(r.y1_um / p), h);
-                double sum = 0.0;
-                for (double fy = std::max(fy0, 0.0); fy < fy1; ++fy) {
-                    const double oy = std::min(r.y1_um, (fy + 1) * p) - std::max(r.y0_um, fy * p);
-                    for (double fx = std::max(fx0, 0.0); fx < fx1; ++fx) {
-                        const double ox
-                            = std::min(r.x1_um, (fx + 1) * p) - std::max(r.x0_um, fx * p);
-                        if (ox > 0.0 && oy > 0.0)
-                            sum += ox * oy
-                                   * plan.exposure.value(static_cast<int64_t>(fx),
-                                                         static_cast<int64_t>(fy));
-                    }
-                }
                 scratch.values[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
-                    = sum / ((r.x1_um - r.x0_um) * (r.y1_um - r.y0_um));
+                    = plan.exposure.mean_over_rect(r.x0_um, r.y0_um, r.x1_um, r.y1_um);
             }
         sample_pixel_transmittance(*plan.pixel_model, plan.pixel_key, x0, y0, x1, y1,
                                    scratch.values.data(), scratch.fraction.data());
