@@ -290,7 +290,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         double margin_um = 0.0, n_mean_area = 0.0, smallest_radius_um = 1e300;
         for (size_t p = 0; p < layer.populations.size(); ++p) {
             const Population& pop = layer.populations[p];
-            PopulationPlan pp { PopulationGrains(pop, scene.seed, static_cast<uint32_t>(l),
+            PopulationPlan pp { PopulationGrains(pop, grain_seed(scene), static_cast<uint32_t>(l),
                                                  static_cast<uint32_t>(p)),
                                 pop.quantum_efficiency * kPhotonsPerUm2PerLxs * lxs_per_value,
                                 { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
@@ -379,7 +379,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                             * early_stop_steps_per_grain(
                                 pop, pp.rates, pp.photons_per_value_um2 * kGreyValue,
                                 scene.shutter_s, development,
-                                hash_ids(scene.seed, 0x9170, l, p));
+                                hash_ids(grain_seed(scene), 0x9170, l, p));
             // The photon count of a grain short of the largest ones at the
             // table's top value, plus 6 Poisson sigmas; brighter grains run
             // the early-stopped chain (quickly decided: they develop).
@@ -409,7 +409,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 req.rates                         = pp.rates;
                 req.options.max_photons           = n_max;
                 req.options.target_standard_error = target;
-                req.options.stream_key            = hash_ids(scene.seed, 0x7ab1e, r);
+                req.options.stream_key            = hash_ids(grain_seed(scene), 0x7ab1e, r);
                 req.options.nthreads              = settings.nthreads;
                 req.grain_steps                   = steps;
                 requests.push_back(req);
@@ -573,7 +573,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
             continue;
         plan.pixel_model = std::move(model);
-        plan.pixel_key   = hash_ids(scene.seed, 0x9133, l);
+        plan.pixel_key   = hash_ids(grain_seed(scene), 0x9133, l);
         plan.setup_seconds
             += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::ostringstream why;

@@ -31,7 +31,20 @@ Status SceneSettings::validate() const
         return Status::errorf("shutter = ", shutter_s, " s: must be in (0, 1e7]");
     if (!std::isfinite(frame_width_mm) || frame_width_mm <= 0.0 || frame_width_mm > 1e9)
         return Status::errorf("width_mm = ", frame_width_mm, ": must be in (0, 1e9]");
+    if (frame && (*frame < -kMaxFrameNumber || *frame > kMaxFrameNumber))
+        return Status::errorf("frame = ", *frame, ": must be in [", -kMaxFrameNumber, ", ",
+                              kMaxFrameNumber, "]");
     return {};
+}
+
+uint64_t frame_seed(uint64_t seed, int64_t frame)
+{
+    return hash_ids(seed, 0xf4a3eULL, static_cast<uint64_t>(frame));
+}
+
+uint64_t grain_seed(const SceneSettings& scene)
+{
+    return scene.frame && !scene.static_grain ? frame_seed(scene.seed, *scene.frame) : scene.seed;
 }
 
 const char* engine_name(Engine engine)
@@ -561,7 +574,7 @@ double max_radius_um(const Stock& stock, const SceneSettings& scene)
     double r = 0.0;
     for (size_t l = 0; l < stock.layers.size(); ++l)
         for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
-            r = std::max(r, PopulationGrains(stock.layers[l].populations[p], scene.seed,
+            r = std::max(r, PopulationGrains(stock.layers[l].populations[p], grain_seed(scene),
                                              static_cast<uint32_t>(l), static_cast<uint32_t>(p))
                                 .max_radius_um());
     return r;

@@ -219,6 +219,39 @@ TEST(Render, AnotherSeedGivesAnotherImage)
     EXPECT_GT(differ, a.size() / 2);
 }
 
+size_t count_differing(const std::vector<float>& a, const std::vector<float>& b)
+{
+    size_t differ = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+        differ += a[i] != b[i];
+    return differ;
+}
+
+TEST(Render, EachFrameHasItsOwnGrainUnlessStatic)
+{
+    Scene s = small_scene();
+    s.scene.seed        = 7;
+    const auto single   = render(s, {});
+    s.scene.frame       = 1001;
+    const auto frame_a  = render(s, {});
+    s.scene.frame       = 1002;
+    const auto frame_b  = render(s, {});
+    EXPECT_GT(count_differing(frame_a, frame_b), frame_a.size() / 2);
+    EXPECT_GT(count_differing(single, frame_a), frame_a.size() / 2);
+    // A frame is its documented seed: frame_seed(seed, frame) as a single image.
+    Scene alone         = small_scene();
+    alone.scene.seed    = frame_seed(7, 1002);
+    EXPECT_TRUE(bit_identical(render(alone, {}), frame_b));
+    // static: every frame is the single image of the seed.
+    s.scene.static_grain = true;
+    EXPECT_TRUE(bit_identical(render(s, {}), single));
+    s.scene.frame = 1001;
+    EXPECT_TRUE(bit_identical(render(s, {}), single));
+    EXPECT_NE(frame_seed(7, 1), frame_seed(7, 2));
+    EXPECT_NE(frame_seed(7, 1), frame_seed(8, 1));
+    EXPECT_NE(frame_seed(7, -1), frame_seed(7, 1));
+}
+
 TEST(Render, ScanResolutionIsIndependentOfInputResolution)
 {
     const Scene s = small_scene();

@@ -122,6 +122,11 @@ void set_metadata(OIIO::ImageSpec& spec, const FilmgrainOptions& opts)
     spec.attribute("filmgrain:stock", stock_to_json(opts.stock));
     spec.attribute("filmgrain:stock_name", opts.stock.name);
     spec.attribute("filmgrain:seed", std::to_string(opts.scene.seed));
+    if (opts.scene.frame) {
+        spec.attribute("filmgrain:frame", std::to_string(*opts.scene.frame));
+        spec.attribute("filmgrain:static", opts.scene.static_grain ? 1 : 0);
+    }
+    spec.attribute("filmgrain:grain_seed", std::to_string(grain_seed(opts.scene)));
     spec.attribute("filmgrain:exposure_stops", static_cast<float>(opts.scene.exposure_stops));
     spec.attribute("filmgrain:shutter_s", static_cast<float>(opts.scene.shutter_s));
     spec.attribute("filmgrain:frame_width_mm", static_cast<float>(opts.scene.frame_width_mm));

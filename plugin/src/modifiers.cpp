@@ -182,6 +182,31 @@ bool parse_seed(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return true;
 }
 
+bool parse_frame(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    const bool negative = !v.empty() && v.front() == '-';
+    uint64_t magnitude  = 0;
+    if (!parse_count(negative ? v.substr(1) : v, static_cast<uint64_t>(kMaxFrameNumber),
+                     magnitude, why)) {
+        why += "; a frame number is a whole number in [" + std::to_string(-kMaxFrameNumber)
+               + ", " + std::to_string(kMaxFrameNumber) + "]";
+        return false;
+    }
+    const int64_t m = static_cast<int64_t>(magnitude);
+    cmd.scene.frame = negative ? -m : m;
+    return true;
+}
+
+bool parse_static(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (v != "0" && v != "1") {
+        why = "must be 0 or 1";
+        return false;
+    }
+    cmd.scene.static_grain = v == "1";
+    return true;
+}
+
 bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     cmd.has_width_mm = true;
@@ -384,6 +409,18 @@ const Modifier kModifiers[] = {
       default_shutter, parse_shutter },
     { "seed", "N", "grain pattern: a whole number in [0, 2^64 - 1]",
       [](const FilmgrainCommand& d) { return std::to_string(d.scene.seed); }, parse_seed },
+    { "frame", "N",
+      "frame number: the grain of frame N is seed's frame_seed(seed, N) (README \"Sequences\"), "
+      "so a frame rendered alone equals the same frame of a --frames sequence",
+      [](const FilmgrainCommand& d) {
+          return d.scene.frame ? std::to_string(*d.scene.frame)
+                               : std::string("none (a single image: the seed as is); "
+                                             "--frames sets it per frame");
+      },
+      parse_frame },
+    { "static", "0|1", "1: the same grain on every frame (the seed as is, frame ignored)",
+      [](const FilmgrainCommand& d) { return std::string(d.scene.static_grain ? "1" : "0"); },
+      parse_static },
     { "width_mm", "MM", "width of the film frame, millimetres, (0, 1e9]",
       [](const FilmgrainCommand& d) { return format_number(d.scene.frame_width_mm); },
       parse_width_mm },

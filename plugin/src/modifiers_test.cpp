@@ -76,6 +76,12 @@ TEST(Modifiers, Forms)
     EXPECT_EQ(parse_ok("--filmgrain:exposure=1e-1").scene.exposure_stops, 0.1);
     EXPECT_EQ(parse_ok("--filmgrain:stock=dir/my=stock.json").stock, "dir/my=stock.json");
     EXPECT_EQ(parse_ok("--filmgrain:roi=0,0,1,1").roi_width, 1);
+    EXPECT_FALSE(parse_ok("--filmgrain").scene.frame.has_value());
+    EXPECT_EQ(parse_ok("--filmgrain:frame=1001").scene.frame, 1001);
+    EXPECT_EQ(parse_ok("--filmgrain:frame=-5").scene.frame, -5);
+    EXPECT_EQ(parse_ok("--filmgrain:frame=1000000000").scene.frame, 1000000000);
+    EXPECT_TRUE(parse_ok("--filmgrain:frame=1:static=1").scene.static_grain);
+    EXPECT_FALSE(parse_ok("--filmgrain:static=0").scene.static_grain);
 }
 
 TEST(Modifiers, UnknownModifierNamesItAndListsTheValidOnes)
@@ -106,6 +112,10 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:seed=1.5", { "seed=1.5", "whole number", "N" } },
         { "--filmgrain:seed=18446744073709551616", { "seed=18446744073709551616", "too large", "" } },
         { "--filmgrain:seed=+1", { "seed=+1", "whole number", "" } },
+        { "--filmgrain:frame=1000000001", { "frame=1000000001", "too large", "[-1000000000" } },
+        { "--filmgrain:frame=1.5", { "frame=1.5", "whole number", "N" } },
+        { "--filmgrain:frame=--1", { "frame=--1", "whole number", "N" } },
+        { "--filmgrain:static=2", { "static=2", "0 or 1", "0|1" } },
         { "--filmgrain:scan=0x0", { "scan=0x0", "at least 1", "WxH" } },
         { "--filmgrain:scan=10x", { "scan=10x", "height", "WxH" } },
         { "--filmgrain:scan=x10", { "scan=x10", "width", "WxH" } },
@@ -151,7 +161,8 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
 TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
 {
     const auto docs = filmgrain_modifier_docs();
-    const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "width_mm",
+    const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "frame",
+                           "static",   "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
                            "photons",  "coverage", "grains",  "scale",    "samples",
                            "tile" };

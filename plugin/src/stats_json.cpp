@@ -15,6 +15,9 @@ std::string stats_json(const RunReport& r)
     j["version"]        = version_string();
     j["stock"]          = r.stock_name;
     j["seed"]           = r.scene.seed;
+    j["frame"]          = r.scene.frame ? Json(*r.scene.frame) : Json(nullptr);
+    j["static"]         = r.scene.static_grain;
+    j["grain_seed"]     = grain_seed(r.scene);
     j["exposure_stops"] = r.scene.exposure_stops;
     j["shutter_s"]      = r.scene.shutter_s;
     j["frame_width_mm"] = r.scene.frame_width_mm;

@@ -1,7 +1,8 @@
 // filmgrain CLI: the --stats JSON document.
 //
 // Its key names are a contract for scripts (tests/cli checks them):
-//   engine, version, stock, seed, exposure_stops, shutter_s, frame_width_mm,
+//   engine, version, stock, seed, frame (null for a single image), static,
+//   grain_seed, exposure_stops, shutter_s, frame_width_mm,
 //   seconds {read, color, simulate, write, total},
 //   scan {width, height, pitch_x_um, pitch_y_um},
 //   roi {x, y, width, height},

@@ -22,6 +22,9 @@
 
 namespace filmgrain {
 
+/// Largest |frame number| of a sequence.
+inline constexpr int64_t kMaxFrameNumber = 1000000000;
+
 /// The shot: how the scene is exposed onto the film (MODEL.md 1-2).
 struct SceneSettings {
     /// Exposure offset in stops (2^stops on every exposure). [-64, 64].
@@ -33,9 +36,27 @@ struct SceneSettings {
     double frame_width_mm = 24.89;
     /// Selects the grain pattern and every random outcome.
     uint64_t seed = 0;
+    /// Frame number within a sequence; unset: a single image, whose grain
+    /// comes from `seed` as is. Set: the grain comes from
+    /// frame_seed(seed, frame), so that every frame has its own grain and a
+    /// frame rendered alone equals the same frame in a sequence. [-1e9, 1e9].
+    std::optional<int64_t> frame;
+    /// With a frame: keep one grain pattern for every frame (`seed` as is).
+    bool static_grain = false;
 
     Status validate() const;
 };
+
+/// The seed of frame `frame` of a sequence rendered with `seed`:
+/// hash_ids(seed, 0xf4a3e, frame) of core/src/rng.h, i.e. MurmurHash3's
+/// 64-bit finaliser chained over (seed, a constant naming the purpose,
+/// frame as a two's-complement 64-bit integer). Documented (README
+/// "Sequences") so that other tools can reproduce a frame's grain.
+uint64_t frame_seed(uint64_t seed, int64_t frame);
+
+/// The seed the grain of `scene` is drawn from: frame_seed(seed, *frame)
+/// for a frame of a sequence unless static_grain, else `seed`.
+uint64_t grain_seed(const SceneSettings& scene);
 
 /// Which engine simulates the grains.
 enum class Engine {

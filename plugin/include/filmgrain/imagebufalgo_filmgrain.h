@@ -113,7 +113,10 @@ namespace IBA {
 ///   scan, its data window the ROI.
 ///   Metadata on dst's spec (strings unless noted): filmgrain:quantity,
 ///   filmgrain:stock (the full stock as JSON), filmgrain:stock_name,
-///   filmgrain:seed (decimal: 64-bit), filmgrain:exposure_stops (float),
+///   filmgrain:seed (decimal: 64-bit), filmgrain:frame (decimal, only for
+///   a frame of a sequence) and filmgrain:static (int, likewise),
+///   filmgrain:grain_seed (decimal: the seed the grain was drawn from,
+///   grain_seed(scene)), filmgrain:exposure_stops (float),
 ///   filmgrain:shutter_s (float), filmgrain:frame_width_mm (float),
 ///   filmgrain:engine, filmgrain:version.
 /// roi: scan pixels to render (default: the whole scan). Must lie inside
