@@ -175,10 +175,17 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
         FilmgrainCommand cmd;
         EXPECT_FALSE(parse_filmgrain_modifiers("--filmgrain:" + docs[i].key + "=", cmd).ok());
     }
-    EXPECT_EQ(docs[0].default_text, default_preset_name());
-    EXPECT_EQ(docs[2].default_text, "0.0208333 (1/48)");
-    EXPECT_EQ(docs[7].default_text, engine_name(RenderSettings().engine));
-    EXPECT_EQ(docs[15].default_text, std::to_string(RenderSettings().tile_size_px));
+    const auto default_of = [&docs](const std::string& key) {
+        for (const ModifierDoc& d : docs)
+            if (d.key == key)
+                return d.default_text;
+        return std::string("(no such modifier)");
+    };
+    EXPECT_EQ(default_of("stock"), default_preset_name());
+    EXPECT_EQ(default_of("shutter"), "0.0208333 (1/48)");
+    EXPECT_EQ(default_of("engine"), engine_name(RenderSettings().engine));
+    EXPECT_EQ(default_of("tile"), std::to_string(RenderSettings().tile_size_px));
+    EXPECT_EQ(default_of("static"), "0");
 }
 
 TEST(Modifiers, OutputModifiers)
