@@ -135,8 +135,8 @@ const std::vector<OptionSpec>& option_table()
               return Status();
           } },
         { "-o", nullptr, "FILE.exr",
-          "Output OpenEXR file (required to render; written atomically: a temporary file in "
-          "the same directory, renamed when complete). Modifier :compression=NAME",
+          "Output OpenEXR file (required to render; written atomically: created unnamed in "
+          "its directory and linked into place when complete). Modifier :compression=NAME",
           [](CliArgs& a, const std::string& flag, const char* v) {
               if (Status s = once(!a.output.empty(), "-o"); !s)
                   return s;
@@ -146,6 +146,33 @@ const std::vector<OptionSpec>& option_table()
               return parse_output_modifiers(flag, a.output_modifiers);
           },
           true },
+        { "--frames", nullptr, "LIST",
+          "Render a sequence: frame list such as 1001-1100 or 1-10,20,30-40x2 (as oiiotool). "
+          "INPUT, -o, --stats and --preview are then frame patterns (name.####.exr, "
+          "name.#.exr, name.@@@.exr, name.%04d.exr); frame N's grain is frame=N's (see "
+          "Sequences below). Default: none (one image)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s = once(!a.frames.empty(), "--frames");
+              a.frames = v;
+              if (s && a.frames.empty())
+                  s = Status::error("--frames: empty frame list");
+              return s;
+          } },
+        { "--skip-existing", nullptr, "",
+          "Sequences: skip a frame whose outputs exist and were made with the same settings "
+          "(filmgrain:settings_hash); re-render the others (resuming a stopped sequence). "
+          "Default: off (every frame is rendered)",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.skip_existing = true;
+              return Status();
+          } },
+        { "--skip-missing", nullptr, "",
+          "Sequences: a missing input frame is skipped with a warning and counted, instead of "
+          "an error. Default: off (an error naming the frame)",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.skip_missing = true;
+              return Status();
+          } },
         { "--stats", nullptr, "FILE.json",
           "Also write render statistics as JSON (timings, grain counts, input pixels)",
           [](CliArgs& a, const std::string&, const char* v) {
@@ -379,6 +406,8 @@ std::string help_text()
         << "                 --filmgrain[:key=value...] [-d half|float] -o OUTPUT.exr\n"
         << "                 [--stats FILE.json] [--preview FILE.png] [--threads N]\n"
         << "                 [--progress] [-q]\n"
+        << "       filmgrain PLATE.####.exr --frames LIST --filmgrain[:...] -o NEG.####.exr\n"
+        << "                 [--skip-existing] [--skip-missing] [...]\n"
         << "       filmgrain --wedge --filmgrain[:key=value...] -o OUTPUT.exr [...]\n"
         << "       filmgrain --list-stocks | --print-stock NAME|FILE | --version | --help\n\n"
         << "Options:\n";
@@ -446,9 +475,28 @@ std::string help_text()
                    "-log10(transmittance) + the stock's base density. The full (display) "
                    "window is the whole scan, the data window the roi. Metadata: "
                    "filmgrain:quantity, filmgrain:stock (the stock as JSON), "
-                   "filmgrain:stock_name, filmgrain:seed, filmgrain:exposure_stops, "
+                   "filmgrain:stock_name, filmgrain:seed, filmgrain:frame and "
+                   "filmgrain:static (sequences), filmgrain:grain_seed, "
+                   "filmgrain:settings_hash, filmgrain:exposure_stops, "
                    "filmgrain:shutter_s, filmgrain:frame_width_mm, filmgrain:engine, "
                    "filmgrain:version.");
+    out << "\nSequences:\n";
+    append_wrapped(out, "    ",
+                   "--frames LIST renders one image per frame; INPUT (or a still image, read "
+                   "for every frame, or --wedge), -o, --stats and --preview are frame "
+                   "patterns: # is four digits (oiiotool), a run of # or @ one digit each "
+                   "(#### and @@@@: four), %04d as printf. INPUT may carry the list itself "
+                   "(plate.1001-1100#.exr). Frame N's grain is drawn from frame_seed(seed, N) "
+                   "= hash_ids(seed, 0xf4a3e, N) (MurmurHash3's fmix64 chained, "
+                   "core/src/rng.h), exactly as --filmgrain:frame=N renders it alone, so a "
+                   "frame re-rendered alone is bit-identical; :static=1 keeps the seed's "
+                   "pattern on every frame. Each output records filmgrain:frame, "
+                   "filmgrain:grain_seed and filmgrain:settings_hash (SHA-1 of every setting "
+                   "that decides the pixels, and of the input file's path, size and time); "
+                   "--skip-existing skips frames whose outputs carry the same hash. A stopped "
+                   "sequence leaves the frames before it complete and nothing of the frame "
+                   "it stopped in: outputs are created unnamed and linked into place only "
+                   "when complete, so even SIGKILL leaves no partial file.");
     out << "\nPreview:\n";
     append_wrapped(out, "    ",
                    "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the "
@@ -457,7 +505,9 @@ std::string help_text()
                    "R, G and B give an RGB PNG; a single layer (or two) gives grey from the "
                    "first layer; otherwise the first three layers in stock order are R, G, B.");
     out << "\nProgress and messages go to stderr; errors read 'filmgrain: error: ...'.\n"
-        << "On any error or interruption no output file (-o, --stats, --preview) is created.\n"
+        << "On any error or interruption no output file (-o, --stats, --preview) of the\n"
+        << "image being rendered is created. Progress shows on a terminal once a run takes\n"
+        << "a second (frames done, the frame's fraction, elapsed and estimated time left).\n"
         << "\nExit status:\n";
     append_wrapped(out, "    ",
                    "0 success; " + std::to_string(kExitError)

@@ -28,6 +28,10 @@ struct CliArgs {
     OutputModifiers output_modifiers;
     OutputType output_type = OutputType::float32;  ///< -d half|float
 
+    std::string frames;  ///< --frames LIST (empty: not given)
+    bool skip_existing = false;  ///< --skip-existing
+    bool skip_missing  = false;  ///< --skip-missing
+
     std::string stats_path;  ///< --stats FILE.json
     std::string preview_path;  ///< --preview FILE.png
 

@@ -5,11 +5,14 @@
 // write the outputs all-or-nothing. It does no maths of its own.
 #include <OpenImageIO/half.h>
 
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/hash.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -24,6 +27,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -35,6 +39,7 @@
 #include "filmgrain/wedge.h"
 #include "output_files.h"
 #include "preview.h"
+#include "sequence.h"
 #include "stats_json.h"
 
 namespace filmgrain::cli {
@@ -84,21 +89,29 @@ std::string trim(std::string s)
 
 class Console {
 public:
-    Console(bool quiet, bool show_progress)
+    /// Progress is shown on a terminal once a run has taken a second, and
+    /// from the start with --progress (`forced`); never with -q.
+    Console(bool quiet, bool terminal, bool forced = false)
         : m_quiet(quiet)
-        , m_show_progress(show_progress && !quiet)
+        , m_show_progress((terminal || forced) && !quiet)
+        , m_delay_s(forced ? 0.0 : 1.0)
+        , m_start(Clock::now())
     {
     }
 
     void info(const std::string& msg) const
     {
-        if (!m_quiet)
-            std::cerr << "filmgrain: " << msg << std::endl;
+        if (m_quiet)
+            return;
+        end_progress();
+        std::cerr << "filmgrain: " << msg << std::endl;
     }
     void warning(const std::string& msg) const
     {
-        if (!m_quiet)
-            std::cerr << "filmgrain: warning: " << msg << std::endl;
+        if (m_quiet)
+            return;
+        end_progress();
+        std::cerr << "filmgrain: warning: " << msg << std::endl;
     }
     int fail(const std::string& msg) const
     {
@@ -107,26 +120,52 @@ public:
         return kExitError;
     }
     int fail(const Status& s) const { return fail(s.message()); }
-    int fail_interrupted() const
+    int fail_interrupted(const std::string& what) const
     {
         const int sig = static_cast<int>(g_signal);
         const char* name = sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM"
                                                     : sig == SIGHUP  ? "SIGHUP"
                                                                      : "a signal";
-        fail(std::string("interrupted by ") + name + ": no output written");
+        fail(std::string("interrupted by ") + name + ": " + what);
         return kExitSignalBase + sig;
     }
 
-    /// A single updating line: "filmgrain: simulating  42%".
+    /// The sequence position shown by progress(): frame `index` (0-based)
+    /// of `count`, numbered `number`; count 0: a single image.
+    void set_frame(size_t index, size_t count, std::optional<int> number) const
+    {
+        m_index  = index;
+        m_count  = count;
+        m_number = number;
+    }
+
+    /// A single updating line:
+    /// "filmgrain: frame 3/100 (1003)  42%  elapsed 0:12  left ~4:10".
+    /// The fraction is the current image's; elapsed and left are the run's.
     void progress(double fraction) const
     {
-        if (!m_show_progress)
+        const double elapsed = seconds_since(m_start);
+        if (!m_show_progress || elapsed < m_delay_s)
             return;
         const int percent = static_cast<int>(fraction * 100.0);
-        if (percent == m_percent)
+        if (percent == m_percent && elapsed - m_shown_at < 1.0)
             return;
-        m_percent = percent;
-        std::cerr << "\rfilmgrain: simulating " << std::setw(3) << percent << "%" << std::flush;
+        m_percent  = percent;
+        m_shown_at = elapsed;
+        std::ostringstream line;
+        line << "\rfilmgrain: ";
+        if (m_count > 0)
+            line << "frame " << m_index + 1 << "/" << m_count << " (" << *m_number << ") ";
+        else
+            line << "simulating ";
+        line << std::setw(3) << percent << "%  elapsed " << clock_text(elapsed);
+        const double done = m_count > 0 ? (static_cast<double>(m_index) + fraction)
+                                              / static_cast<double>(m_count)
+                                        : fraction;
+        if (done > 0.01)
+            line << "  left ~" << clock_text(elapsed * (1.0 - done) / done);
+        line << "   ";
+        std::cerr << line.str() << std::flush;
         m_line_open = true;
     }
     void end_progress() const
@@ -138,9 +177,26 @@ public:
     }
 
 private:
+    static std::string clock_text(double seconds)
+    {
+        const long s = static_cast<long>(seconds + 0.5);
+        std::ostringstream out;
+        if (s >= 3600)
+            out << s / 3600 << ":" << std::setw(2) << std::setfill('0') << s / 60 % 60;
+        else
+            out << s / 60;
+        out << ":" << std::setw(2) << std::setfill('0') << s % 60;
+        return out.str();
+    }
+
     bool m_quiet;
     bool m_show_progress;
+    double m_delay_s;
+    Clock::time_point m_start;
+    mutable size_t m_index = 0, m_count = 0;
+    mutable std::optional<int> m_number;
     mutable int m_percent    = -1;
+    mutable double m_shown_at = 0.0;
     mutable bool m_line_open = false;
 };
 
@@ -394,7 +450,7 @@ Status check_output_size(const FilmgrainOptions& opts, const OIIO::ImageSpec& in
 
 /// The files the render reads besides INPUT (a stock JSON, an OCIO config)
 /// must not be any of its outputs: --stats can have any name.
-Status check_outputs_spare_inputs(const CliArgs& a)
+Status check_outputs_spare_inputs(const CliArgs& a, const FrameJob& job)
 {
     const char* ocio_env = std::getenv("OCIO");
     const std::pair<const char*, std::string> inputs[] = {
@@ -403,7 +459,7 @@ Status check_outputs_spare_inputs(const CliArgs& a)
         { "the $OCIO config", a.colorconfig.empty() && ocio_env ? ocio_env : "" },
     };
     const std::pair<const char*, const std::string*> outputs[] = {
-        { "-o", &a.output }, { "--stats", &a.stats_path }, { "--preview", &a.preview_path }
+        { "-o", &job.output }, { "--stats", &job.stats }, { "--preview", &job.preview }
     };
     for (const auto& [what_in, in] : inputs)
         for (const auto& [what_out, out] : outputs) {
@@ -428,8 +484,8 @@ OIIO::ImageBuf make_wedge()
 /// Chooses INPUT's colour space, converts `src` in place to the config's
 /// scene_linear and says which space was used. 1-channel images stay grey
 /// when the conversion is a no-op, else become (y, y, y) first.
-Status convert_to_scene_linear(const CliArgs& a, OIIO::ImageBuf& src, const Console& con,
-                               std::string& chosen)
+Status convert_to_scene_linear(const CliArgs& a, const std::string& input_path,
+                               OIIO::ImageBuf& src, const Console& con, std::string& chosen)
 {
     const std::string declared = src.spec().get_string_attribute("oiio:ColorSpace");
     std::string reason;
@@ -454,7 +510,7 @@ Status convert_to_scene_linear(const CliArgs& a, OIIO::ImageBuf& src, const Cons
             return Status::errorf("--iscolorspace ", chosen, ": ", s.message());
         if (declared.empty())
             return s;
-        return Status::errorf("input '", a.input, "' declares colour space '", declared,
+        return Status::errorf("input '", input_path, "' declares colour space '", declared,
                               "' (oiio:ColorSpace), which the OCIO config does not know; "
                               "name its colour space with --iscolorspace NAME (",
                               s.message(), ")");
@@ -480,20 +536,31 @@ Status convert_to_scene_linear(const CliArgs& a, OIIO::ImageBuf& src, const Cons
     return {};
 }
 
-Status write_text_file(const std::string& path, const std::string& text)
+/// Writes `buf` as `format` into the reserved output `final_path` (created
+/// only now, unnamed until commit: see OutputFiles).
+Status write_image(OutputFiles& files, const std::string& final_path, OIIO::ImageBuf& buf,
+                   OIIO::TypeDesc type, const char* format)
 {
+    std::FILE* f = nullptr;
+    if (Status s = files.open(final_path, f); !s)
+        return s;
+    bool ok = false;
+    {
+        OIIO::Filesystem::IOFile proxy(f, OIIO::Filesystem::IOProxy::Write);
+        buf.set_write_ioproxy(&proxy);
+        ok = buf.write(final_path, type, format);
+        buf.set_write_ioproxy(nullptr);
+    }
     errno = 0;
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out)
-        return Status::errorf("cannot write '", path, "'",
-                              errno ? std::string(": ") + std::strerror(errno) : std::string());
+    if (std::fclose(f) != 0 && ok)
+        return Status::errorf("cannot write '", final_path, "': ", std::strerror(errno));
+    if (!ok)
+        return Status::errorf("cannot write '", final_path, "': ", trim(buf.geterror()));
     return {};
 }
 
-Status write_preview(const OIIO::ImageBuf& density, const Stock& stock,
-                     const std::string& temp_path, const std::string& final_path)
+Status write_preview(OutputFiles& files, const OIIO::ImageBuf& density, const Stock& stock,
+                     const std::string& final_path)
 {
     std::vector<std::string> names;
     for (const Layer& l : stock.layers)
@@ -507,8 +574,8 @@ Status write_preview(const OIIO::ImageBuf& density, const Stock& stock,
     spec.attribute("oiio:ColorSpace", "sRGB");
     OIIO::ImageBuf buf(spec);
     buf.set_pixels(buf.roi(), OIIO::TypeUInt8, p.pixels.data());
-    if (!buf.write(temp_path, OIIO::TypeUnknown, "png"))
-        return Status::errorf("cannot write preview '", final_path, "': ", trim(buf.geterror()));
+    if (Status s = write_image(files, final_path, buf, OIIO::TypeUnknown, "png"); !s)
+        return Status::errorf("preview: ", s.message());
     return {};
 }
 
@@ -519,50 +586,130 @@ std::string format_seconds(double s)
     return out.str();
 }
 
-int render(const CliArgs& a, const Console& con)
+/// What one image's render needs besides its files: the options shared by
+/// every frame (stock loaded once).
+struct RenderContext {
+    const CliArgs& args;
+    const Console& con;
+    FilmgrainOptions opts;  ///< scene.frame is set per frame
+};
+
+/// Identifies what an output was made from, for --skip-existing: a SHA-1
+/// (OpenImageIO's) of the settings that decide the pixels, as canonical
+/// JSON: version, stock (complete), scene (frame included), engine options,
+/// scan, roi, pixel type, compression, colour conversion, and the input
+/// file's path, size and modification time. Not the tile size or thread
+/// count (they never change the output).
+std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts,
+                          const FrameJob& job)
+{
+    using Json            = nlohmann::ordered_json;
+    const CliArgs& a      = ctx.args;
+    const EngineOptions& e = opts.engine_options;
+    const SceneSettings& sc = opts.scene;
+    Json j;
+    j["version"]  = version_string();
+    j["stock"]    = stock_to_json(opts.stock);
+    j["scene"]    = { { "exposure_stops", sc.exposure_stops },
+                      { "shutter_s", sc.shutter_s },
+                      { "frame_width_mm", sc.frame_width_mm },
+                      { "seed", sc.seed },
+                      { "frame", sc.frame ? Json(*sc.frame) : Json(nullptr) },
+                      { "static", sc.static_grain } };
+    j["engine"]   = { { "engine", engine_name(e.engine) },
+                      { "tolerance", e.tolerance },
+                      { "kinetics", e.kinetics ? kinetics_method_name(*e.kinetics) : "" },
+                      { "photons", e.exposure_method ? exposure_method_name(*e.exposure_method) : "" },
+                      { "coverage", e.coverage ? coverage_method_name(*e.coverage) : "" },
+                      { "grains", e.grains ? grain_method_name(*e.grains) : "" },
+                      { "scale", e.scale ? scale_method_name(*e.scale) : "" },
+                      { "samples", e.coverage_samples } };
+    const FilmgrainCommand& cmd = a.filmgrain;
+    j["scan"]     = { opts.scan_width, opts.scan_height };
+    j["roi"]      = cmd.has_roi ? Json { cmd.roi_x, cmd.roi_y, cmd.roi_width, cmd.roi_height }
+                                : Json(nullptr);
+    j["type"]     = a.output_type == OutputType::half16 ? "half" : "float";
+    j["compression"] = a.output_modifiers.compression;
+    const char* ocio_env = std::getenv("OCIO");
+    j["color"]    = { { "config", !a.colorconfig.empty() ? a.colorconfig
+                                  : ocio_env            ? std::string("$OCIO=") + ocio_env
+                                                        : std::string("embedded") },
+                      { "iscolorspace", a.has_iscolorspace ? a.iscolorspace : "" } };
+    Json input = { { "wedge", a.wedge } };
+    if (!job.input.empty()) {
+        std::error_code ec;
+        input["path"]  = job.input;
+        input["size"]  = static_cast<uint64_t>(fs::file_size(job.input, ec));
+        input["mtime"] = static_cast<int64_t>(
+            fs::last_write_time(job.input, ec).time_since_epoch().count());
+    }
+    j["input"] = std::move(input);
+    return OIIO::SHA1::digest(j.dump().data(), j.dump().size());
+}
+
+/// --skip-existing: the job's EXR exists and says it was made with `hash`,
+/// and its --stats and --preview files exist when asked for.
+bool up_to_date(const FrameJob& job, const std::string& hash)
+{
+    std::error_code ec;
+    for (const std::string* p : { &job.stats, &job.preview })
+        if (!p->empty() && !fs::exists(*p, ec))
+            return false;
+    if (!fs::exists(job.output, ec))
+        return false;
+    auto in = OIIO::ImageInput::open(job.output);
+    if (!in) {
+        OIIO::geterror();  // a damaged output: render it again
+        return false;
+    }
+    const bool same = in->spec().get_string_attribute("filmgrain:settings_hash") == hash;
+    in->close();
+    return same;
+}
+
+enum class FrameOutcome { rendered, up_to_date, missing };
+
+/// Renders one image (a single image, or one frame of a sequence) and
+/// writes its outputs all-or-nothing. Errors are returned; an interruption
+/// is reported as Status "interrupted" (the caller checks interrupted()).
+Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& outcome)
 {
     const auto t_start = Clock::now();
-    if (Status s = validate_render_args(a); !s)
-        return con.fail(s);
-
+    const CliArgs& a   = ctx.args;
+    const Console& con = ctx.con;
     const FilmgrainCommand& cmd = a.filmgrain;
-    FilmgrainOptions opts;
-    if (Status s = load_stock(cmd.stock, opts.stock); !s)
-        return con.fail(s);
-    if (Status s = check_outputs_spare_inputs(a); !s)
-        return con.fail(s);
-    opts.scene        = cmd.scene;
-    if (a.wedge && !cmd.has_width_mm)
-        opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
-    opts.engine_options = cmd.engine_options;
-    opts.scan_width   = cmd.scan_width;
-    opts.scan_height  = cmd.scan_height;
-    opts.tile_size_px = cmd.tile_size_px;
-    opts.progress     = [&con](double f) {
-        if (interrupted())
-            return false;
-        con.progress(f);
-        return true;
-    };
+    FilmgrainOptions opts = ctx.opts;
+    if (job.frame)
+        opts.scene.frame = *job.frame;
+    outcome = FrameOutcome::rendered;
+
+    std::error_code ec;
+    if (!job.input.empty() && job.frame && !fs::exists(job.input, ec) && a.skip_missing) {
+        outcome = FrameOutcome::missing;
+        con.warning("frame " + std::to_string(*job.frame) + ": input '" + job.input
+                    + "' does not exist: skipped (--skip-missing)");
+        return {};
+    }
+    const std::string hash = settings_hash(ctx, opts, job);
+    if (a.skip_existing && up_to_date(job, hash)) {
+        outcome = FrameOutcome::up_to_date;
+        con.info("'" + job.output + "' is up to date (same settings): skipped");
+        return {};
+    }
+
     OIIO::ROI roi;  // undefined: the whole scan
     if (cmd.has_roi)
         roi = OIIO::ROI(static_cast<int>(cmd.roi_x), static_cast<int>(cmd.roi_x + cmd.roi_width),
                         static_cast<int>(cmd.roi_y),
                         static_cast<int>(cmd.roi_y + cmd.roi_height));
 
-    // Reserve every output first: an unwritable directory fails now, not
-    // after the render. The temporaries are removed on every failure path
-    // (OutputFiles' destructor).
+    // Check every output's directory first: an unwritable one fails now, not
+    // after the render. Files are created only when written (OutputFiles).
     OutputFiles files;
-    std::string exr_temp, stats_temp, preview_temp;
-    if (Status s = files.reserve(a.output, exr_temp); !s)
-        return con.fail(s);
-    if (!a.preview_path.empty())
-        if (Status s = files.reserve(a.preview_path, preview_temp); !s)
-            return con.fail(s);
-    if (!a.stats_path.empty())
-        if (Status s = files.reserve(a.stats_path, stats_temp); !s)
-            return con.fail(s);
+    for (const std::string* p : { &job.output, &job.preview, &job.stats })
+        if (!p->empty())
+            if (Status s = files.reserve(*p); !s)
+                return s;
 
     RunReport report;
     report.stock_name = opts.stock.name;
@@ -580,39 +727,46 @@ int render(const CliArgs& a, const Console& con)
         con.info("input: the built-in step wedge, " + std::to_string(src.spec().width) + "x"
                  + std::to_string(src.spec().height) + " scene-linear grey");
     } else {
-        if (Status s = read_input(a.input, opts, cmd, src, header); !s)
-            return con.fail(s);
-        report.input_file = a.input;
+        if (Status s = read_input(job.input, opts, cmd, src, header); !s)
+            return s;
+        report.input_file = job.input;
     }
     if (Status s = check_output_size(opts, header, cmd); !s)
-        return con.fail(s);
+        return s;
     report.seconds.read = seconds_since(t);
     if (interrupted())
-        return con.fail_interrupted();
+        return Status::error("interrupted");
 
     // Colour.
     t = Clock::now();
     if (!a.wedge)
-        if (Status s = convert_to_scene_linear(a, src, con, report.input_colorspace); !s)
-            return con.fail(s);
+        if (Status s = convert_to_scene_linear(a, job.input, src, con, report.input_colorspace);
+            !s)
+            return s;
     report.seconds.color = seconds_since(t);
     if (interrupted())
-        return con.fail_interrupted();
+        return Status::error("interrupted");
 
     // Simulate.
     t = Clock::now();
+    opts.progress = [&con](double f) {
+        if (interrupted())
+            return false;
+        con.progress(f);
+        return true;
+    };
     OIIO::ImageBuf dst;
     const bool ok = IBA::filmgrain(dst, src, opts, roi, a.threads, &report.render);
     con.end_progress();
     report.seconds.simulate = seconds_since(t);
     if (interrupted())
-        return con.fail_interrupted();
+        return Status::error("interrupted");
     if (!ok) {
         // The operator's messages start with its name, as OIIO's do.
         std::string msg = trim(dst.geterror());
         if (msg.rfind("filmgrain: ", 0) == 0)
             msg.erase(0, std::strlen("filmgrain: "));
-        return con.fail(msg);
+        return Status::error(msg);
     }
 
     RenderSettings geometry_settings;
@@ -621,7 +775,7 @@ int render(const CliArgs& a, const Console& con)
     if (Status s = scan_geometry(opts.scene, header.width, header.height, geometry_settings,
                                  report.scan);
         !s)
-        return con.fail(s);
+        return s;
     const OIIO::ROI data = dst.roi();
     report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };
 
@@ -639,34 +793,87 @@ int render(const CliArgs& a, const Console& con)
     // Write, all or nothing.
     t = Clock::now();
     dst.specmod().attribute("compression", a.output_modifiers.compression);
+    dst.specmod().attribute("filmgrain:settings_hash", hash);
     const OIIO::TypeDesc type
         = a.output_type == OutputType::half16 ? OIIO::TypeHalf : OIIO::TypeFloat;
-    if (!dst.write(exr_temp, type, "openexr"))
-        return con.fail("cannot write '" + a.output + "': " + trim(dst.geterror()));
-    if (!a.preview_path.empty())
-        if (Status s = write_preview(dst, opts.stock, preview_temp, a.preview_path); !s)
-            return con.fail(s);
+    if (Status s = write_image(files, job.output, dst, type, "openexr"); !s)
+        return s;
+    if (!job.preview.empty())
+        if (Status s = write_preview(files, dst, opts.stock, job.preview); !s)
+            return s;
     report.seconds.write = seconds_since(t);
     report.seconds.total = seconds_since(t_start);
-    if (!a.stats_path.empty())
-        if (Status s = write_text_file(stats_temp, stats_json(report)); !s)
-            return con.fail("cannot write --stats '" + a.stats_path + "': " + s.message());
+    if (!job.stats.empty())
+        if (Status s = files.write(job.stats, stats_json(report)); !s)
+            return Status::errorf("--stats: ", s.message());
     if (interrupted())
-        return con.fail_interrupted();
+        return Status::error("interrupted");
     if (Status s = files.commit(); !s)
-        return con.fail(s);
+        return s;
 
     std::string layers;
     for (const Layer& l : opts.stock.layers)
         layers += (layers.empty() ? "" : ",") + l.name;
     std::ostringstream summary;
-    summary << "wrote " << a.output << " (" << data.width() << "x" << data.height();
+    summary << "wrote " << job.output << " (" << data.width() << "x" << data.height();
     if (data.width() != report.scan.width || data.height() != report.scan.height)
         summary << " of the " << report.scan.width << "x" << report.scan.height << " scan";
     summary << ", " << opts.stock.layers.size()
             << (opts.stock.layers.size() == 1 ? " layer " : " layers ") << layers << ") in "
             << format_seconds(seconds_since(t_start)) << " s";
     con.info(summary.str());
+    return {};
+}
+
+int render(const CliArgs& a, const Console& con)
+{
+    const auto t_start = Clock::now();
+    if (Status s = validate_render_args(a); !s)
+        return con.fail(s);
+    std::vector<FrameJob> jobs;
+    if (Status s = plan_frames(a, jobs); !s)
+        return con.fail(s);
+
+    RenderContext ctx { a, con, {} };
+    const FilmgrainCommand& cmd = a.filmgrain;
+    if (Status s = load_stock(cmd.stock, ctx.opts.stock); !s)
+        return con.fail(s);
+    ctx.opts.scene = cmd.scene;
+    if (a.wedge && !cmd.has_width_mm)
+        ctx.opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
+    ctx.opts.engine_options = cmd.engine_options;
+    ctx.opts.scan_width     = cmd.scan_width;
+    ctx.opts.scan_height    = cmd.scan_height;
+    ctx.opts.tile_size_px   = cmd.tile_size_px;
+
+    const bool sequence = jobs.front().frame.has_value();
+    size_t rendered = 0, skipped = 0, missing = 0;
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        const FrameJob& job = jobs[i];
+        const std::string where
+            = sequence ? "frame " + std::to_string(*job.frame) + ": " : std::string();
+        con.set_frame(i, sequence ? jobs.size() : 0, job.frame);
+        if (Status s = check_outputs_spare_inputs(a, job); !s)
+            return con.fail(where + s.message());
+        FrameOutcome outcome = FrameOutcome::rendered;
+        const Status s       = render_one(ctx, job, outcome);
+        if (interrupted())
+            return con.fail_interrupted(
+                sequence ? where + "not written; " + std::to_string(rendered)
+                               + " frames written before it are complete"
+                         : std::string("no output written"));
+        if (!s)
+            return con.fail(where + s.message());
+        rendered += outcome == FrameOutcome::rendered;
+        skipped += outcome == FrameOutcome::up_to_date;
+        missing += outcome == FrameOutcome::missing;
+    }
+    if (sequence)
+        con.info("sequence of " + std::to_string(jobs.size()) + " frames: "
+                 + std::to_string(rendered) + " rendered, " + std::to_string(skipped)
+                 + " up to date (skipped), " + std::to_string(missing)
+                 + " missing input (skipped) in " + format_seconds(seconds_since(t_start))
+                 + " s");
     return 0;
 }
 
@@ -679,7 +886,7 @@ int run(int argc, const char** argv)
     CliArgs args;
     if (Status s = parse_command_line(argc, argv, args); !s)
         return Console(false, false).fail(s);
-    const Console con(args.quiet, args.progress || ::isatty(STDERR_FILENO));
+    const Console con(args.quiet, ::isatty(STDERR_FILENO) != 0, args.progress);
 
     if (args.version || args.list_stocks || !args.print_stock.empty()) {
         if (!args.input.empty() || args.wedge || args.has_filmgrain || !args.output.empty())

@@ -1,12 +1,18 @@
 // filmgrain CLI: all-or-nothing output files.
 //
-// Every output (EXR, stats, preview) is first written to a temporary file in
-// its own directory (".NAME.tmp-PID"), so that the final rename is atomic
-// (same file system). Nothing appears under a final name until every output
-// has been written; on any failure, or if the object is destroyed before
-// commit(), every temporary file is removed.
+// Every output (EXR, stats, preview) is checked at the start (its directory
+// must accept a new file) but created only when it is written, as an
+// unnamed file in its own directory (Linux O_TMPFILE): a run killed at any
+// moment, SIGKILL included, leaves no file behind. commit() links each into
+// place under a hidden name (".NAME.tmp-PID") and renames that onto the
+// final name (atomic on the same file system), so nothing appears under a
+// final name until every output has been written. On a file system without
+// O_TMPFILE the file is created under the hidden name when it is written
+// (and removed on failure), as before. On any failure, or if the object is
+// destroyed before commit(), every temporary file is removed.
 #pragma once
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -21,27 +27,41 @@ public:
     OutputFiles(const OutputFiles&)            = delete;
     OutputFiles& operator=(const OutputFiles&) = delete;
 
-    /// Reserves the temporary file for `final_path` and checks that it can
-    /// be created (an unwritable or missing directory fails here, before any
-    /// work). `temp_path` receives its name.
-    Status reserve(const std::string& final_path, std::string& temp_path);
+    /// Checks that `final_path`'s directory accepts a new file (an
+    /// unwritable or missing directory fails here, before any work) and
+    /// records the output. Creates nothing that outlives the call.
+    Status reserve(const std::string& final_path);
 
-    /// Renames every temporary file to its final name. On failure removes
-    /// the temporary files left (and, best effort, the outputs already
-    /// renamed by this call).
+    /// Creates the (unnamed) file of the reserved output `final_path` and
+    /// opens it for writing: `out` is a stdio stream the caller writes and
+    /// closes (fclose) before commit(). Fails if `final_path` was not
+    /// reserved or is already open.
+    Status open(const std::string& final_path, std::FILE*& out);
+
+    /// Writes `bytes` as the whole content of the reserved output.
+    Status write(const std::string& final_path, const std::string& bytes);
+
+    /// Links every output written into place under its final name. On
+    /// failure removes the temporary files left (and, best effort, the
+    /// outputs already placed by this call). Outputs reserved but never
+    /// written are an error.
     Status commit();
 
     /// Removes every temporary file not yet committed. Idempotent.
     void discard() noexcept;
 
-    /// The temporary name used for `final_path`: ".NAME.tmp-PID" beside it.
+    /// The hidden name used for `final_path` on its way into place:
+    /// ".NAME.tmp-PID" beside it.
     static std::string temp_path_for(const std::string& final_path);
 
 private:
     struct Entry {
         std::string final_path;
-        std::string temp_path;
+        int fd = -1;              ///< the unnamed file (O_TMPFILE), else -1
+        std::string named_temp;   ///< the fallback's named file, else empty
+        bool written = false;
     };
+    Entry* find(const std::string& final_path);
     std::vector<Entry> m_entries;
 };
 

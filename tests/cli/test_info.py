@@ -5,12 +5,12 @@ import re
 
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
-MODIFIERS = ["stock", "exposure", "shutter", "seed", "width_mm", "scan", "roi",
+MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "width_mm", "scan", "roi",
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
              "tile"]
 
 OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",
-           "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
+           "--frames", "--skip-existing", "--skip-missing", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
            "--list-stocks", "--print-stock", "--version", "--help"]
 
 
