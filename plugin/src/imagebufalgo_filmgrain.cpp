@@ -29,10 +29,8 @@ namespace IBA {
 
 namespace {
 
-/// Checks src and returns the size of the whole image the film frame maps
-/// to: src's display (full) window, or its data window when none is set.
-bool source_frame(const OIIO::ImageBuf& src, int64_t& width, int64_t& height,
-                  std::string& error)
+/// Checks src's channels and depth.
+bool check_source(const OIIO::ImageBuf& src, std::string& error)
 {
     if (!src.initialized()) {
         error = src.has_error() ? src.geterror() : std::string("source image is empty");
@@ -50,24 +48,97 @@ bool source_frame(const OIIO::ImageBuf& src, int64_t& width, int64_t& height,
                                            spec.depth);
         return false;
     }
-    width  = spec.full_width > 0 ? spec.full_width : spec.width;
-    height = spec.full_height > 0 ? spec.full_height : spec.height;
     return true;
 }
 
-/// The input the render reads, as an ImageView in frame coordinates (0,0 =
-/// the display window's corner). When src holds float pixels in memory that
+/// Where the film lies in src and in the scan. The frame is src's display
+/// (full) window (its data window when none is set): frame_width_mm
+/// across it. Overscan: a data window reaching beyond the display window
+/// is film too, at the same pitch; the film the core renders is then the
+/// box around both windows (`film_*`), and the scan grows by the same
+/// margins, in whole scan pixels. Scan coordinates (ROI, output windows)
+/// keep (0, 0) at the display window's corner, so the overscan has negative
+/// coordinates, as in the EXR.
+struct FilmMapping {
+    int64_t film_x = 0, film_y = 0;  ///< the film's corner, src pixels
+    int64_t film_w = 0, film_h = 0;  ///< the film's size, src pixels
+    double film_width_mm = 0.0;      ///< the film's width
+    int64_t scan_w = 0, scan_h = 0;  ///< the display window's scan
+    int64_t core_scan_w = 0, core_scan_h = 0;  ///< the film's scan (core)
+    int64_t offset_x = 0, offset_y = 0;  ///< display corner in the film's scan
+    bool overscan = false;
+};
+
+bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMapping& m,
+              std::string& error)
+{
+    const bool has_full = spec.full_width > 0 && spec.full_height > 0;
+    const int64_t fx = has_full ? spec.full_x : spec.x, fy = has_full ? spec.full_y : spec.y;
+    const int64_t fw = has_full ? spec.full_width : spec.width;
+    const int64_t fh = has_full ? spec.full_height : spec.height;
+    RenderSettings scan_settings;
+    scan_settings.scan_width  = opts.scan_width;
+    scan_settings.scan_height = opts.scan_height;
+    ScanGeometry display;
+    if (Status s = scan_geometry(opts.scene, fw, fh, scan_settings, display); !s) {
+        error = s.message();
+        return false;
+    }
+    m        = FilmMapping();
+    m.scan_w = display.width;
+    m.scan_h = display.height;
+    const int64_t x0 = std::min<int64_t>(fx, spec.x), y0 = std::min<int64_t>(fy, spec.y);
+    const int64_t x1 = std::max<int64_t>(fx + fw, int64_t(spec.x) + spec.width);
+    const int64_t y1 = std::max<int64_t>(fy + fh, int64_t(spec.y) + spec.height);
+    m.overscan = x0 < fx || y0 < fy || x1 > fx + fw || y1 > fy + fh;
+    if (!m.overscan) {
+        m.film_x = fx, m.film_y = fy, m.film_w = fw, m.film_h = fh;
+        m.film_width_mm = opts.scene.frame_width_mm;
+        m.core_scan_w   = opts.scan_width;  // the core's own rule, as before
+        m.core_scan_h   = opts.scan_height;
+        return true;
+    }
+    // Scan pixels per src pixel: scan_w / fw across, scan_h / fh down. Each
+    // margin must be a whole number of scan pixels.
+    const int64_t margins[4] = { fx - x0, fy - y0, x1 - (fx + fw), y1 - (fy + fh) };
+    const int64_t scale_num[4] = { m.scan_w, m.scan_h, m.scan_w, m.scan_h };
+    const int64_t scale_den[4] = { fw, fh, fw, fh };
+    int64_t scan_margin[4];
+    for (int i = 0; i < 4; ++i) {
+        const int64_t n = margins[i] * scale_num[i];
+        if (n % scale_den[i] != 0) {
+            error = OIIO::Strutil::fmt::format(
+                "the overscan (data window {}x{} at {},{} beyond the {}x{} display window at "
+                "{},{}) is not a whole number of scan pixels at scan = {}x{}: choose a scan "
+                "that makes it whole (the display window's size, or a multiple of it)",
+                spec.width, spec.height, spec.x, spec.y, fw, fh, fx, fy, m.scan_w, m.scan_h);
+            return false;
+        }
+        scan_margin[i] = n / scale_den[i];
+    }
+    m.film_x = x0, m.film_y = y0, m.film_w = x1 - x0, m.film_h = y1 - y0;
+    m.film_width_mm = opts.scene.frame_width_mm * static_cast<double>(m.film_w)
+                      / static_cast<double>(fw);
+    m.offset_x    = scan_margin[0];
+    m.offset_y    = scan_margin[1];
+    m.core_scan_w = m.scan_w + scan_margin[0] + scan_margin[2];
+    m.core_scan_h = m.scan_h + scan_margin[1] + scan_margin[3];
+    return true;
+}
+
+/// The input the render reads, as an ImageView in film coordinates (0,0 =
+/// the film's corner: the display window's, unless there is overscan). When src holds float pixels in memory that
 /// cover the window and dst is another image, the view points straight into
 /// src (no copy); otherwise just the window is copied into `pixels`
 /// (pixels outside src's data window read as 0, OIIO's convention), so a
 /// cache-backed src is read only where the render looks.
 bool source_view(const OIIO::ImageBuf& src, bool dst_aliases_src, const Roi& window,
-                 int64_t frame_width, int64_t frame_height, std::vector<float>& pixels,
-                 ImageView& view, std::string& error)
+                 const FilmMapping& film, std::vector<float>& pixels, ImageView& view,
+                 std::string& error)
 {
     const OIIO::ImageSpec& spec = src.spec();
-    const int64_t fx = spec.full_width > 0 ? spec.full_x : spec.x;
-    const int64_t fy = spec.full_height > 0 ? spec.full_y : spec.y;
+    const int64_t fx = film.film_x, fy = film.film_y;
+    const int64_t frame_width = film.film_w, frame_height = film.film_h;
     view             = ImageView();
     view.full_width  = frame_width;
     view.full_height = frame_height;
@@ -138,23 +209,26 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
                     const FilmgrainOptions& opts, OIIO::ROI roi, int nthreads,
                     RenderStats* stats)
 {
-    int64_t frame_width = 0, frame_height = 0;
     std::string error;
-    if (!source_frame(src, frame_width, frame_height, error)) {
+    FilmMapping film;
+    if (!check_source(src, error) || !map_film(src.spec(), opts, film, error)) {
         dst.errorfmt("filmgrain: {}", error);
         return false;
     }
+    // The core sees the film (with its overscan) as its frame.
+    SceneSettings scene  = opts.scene;
+    scene.frame_width_mm = film.film_width_mm;
 
     RenderSettings settings;
     static_cast<EngineOptions&>(settings) = opts.engine_options;
-    settings.scan_width   = opts.scan_width;
-    settings.scan_height  = opts.scan_height;
+    settings.scan_width   = film.core_scan_w;
+    settings.scan_height  = film.core_scan_h;
     settings.tile_size_px = opts.tile_size_px;
     settings.nthreads     = resolve_threads(nthreads);
     settings.progress     = opts.progress;
 
     ScanGeometry scan;
-    if (Status s = scan_geometry(opts.scene, frame_width, frame_height, settings, scan); !s) {
+    if (Status s = scan_geometry(scene, film.film_w, film.film_h, settings, scan); !s) {
         dst.errorfmt("filmgrain: {}", s.message());
         return false;
     }
@@ -163,15 +237,28 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
                      scan.width, scan.height, INT_MAX);
         return false;
     }
+    // roi is in scan pixels with (0, 0) at the display window's corner; the
+    // overscan lies at negative coordinates and beyond the display scan.
+    const int64_t ox = film.offset_x, oy = film.offset_y;
     if (!roi.defined()) {
-        roi = OIIO::ROI(0, static_cast<int>(scan.width), 0, static_cast<int>(scan.height));
-    } else if (roi.xbegin < 0 || roi.ybegin < 0 || roi.xend > scan.width
-               || roi.yend > scan.height || roi.xend <= roi.xbegin || roi.yend <= roi.ybegin) {
-        dst.errorfmt("filmgrain: roi = {},{},{},{} (x,y,w,h) does not lie inside the {}x{} scan",
-                     roi.xbegin, roi.ybegin, roi.width(), roi.height(), scan.width, scan.height);
+        roi = OIIO::ROI(static_cast<int>(-ox), static_cast<int>(scan.width - ox),
+                        static_cast<int>(-oy), static_cast<int>(scan.height - oy));
+    } else if (roi.xbegin < -ox || roi.ybegin < -oy || roi.xend > scan.width - ox
+               || roi.yend > scan.height - oy || roi.xend <= roi.xbegin
+               || roi.yend <= roi.ybegin) {
+        if (film.overscan)
+            dst.errorfmt("filmgrain: roi = {},{},{},{} (x,y,w,h) does not lie inside the {}x{} "
+                         "scan with its overscan ([{}, {}) x [{}, {}))",
+                         roi.xbegin, roi.ybegin, roi.width(), roi.height(), film.scan_w,
+                         film.scan_h, -ox, scan.width - ox, -oy, scan.height - oy);
+        else
+            dst.errorfmt("filmgrain: roi = {},{},{},{} (x,y,w,h) does not lie inside the {}x{} "
+                         "scan",
+                         roi.xbegin, roi.ybegin, roi.width(), roi.height(), scan.width,
+                         scan.height);
         return false;
     }
-    settings.roi = Roi { roi.xbegin, roi.ybegin, roi.xend, roi.yend };
+    settings.roi = Roi { roi.xbegin + ox, roi.ybegin + oy, roi.xend + ox, roi.yend + oy };
 
     // Validate before allocating: a broken stock must not become a
     // 0-channel image.
@@ -183,15 +270,15 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
 
     // Only the input under the ROI (plus a grain radius) is read.
     Roi window;
-    if (Status s = required_input_window(opts.stock, opts.scene, frame_width, frame_height,
-                                         settings, window);
+    if (Status s = required_input_window(opts.stock, scene, film.film_w, film.film_h, settings,
+                                         window);
         !s) {
         dst.errorfmt("filmgrain: {}", s.message());
         return false;
     }
     std::vector<float> packed;
     ImageView view;
-    if (!source_view(src, &dst == &src, window, frame_width, frame_height, packed, view, error)) {
+    if (!source_view(src, &dst == &src, window, film, packed, view, error)) {
         dst.errorfmt("filmgrain: {}", error);
         return false;
     }
@@ -201,8 +288,8 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     spec.y           = roi.ybegin;
     spec.full_x      = 0;
     spec.full_y      = 0;
-    spec.full_width  = static_cast<int>(scan.width);
-    spec.full_height = static_cast<int>(scan.height);
+    spec.full_width  = static_cast<int>(film.scan_w);
+    spec.full_height = static_cast<int>(film.scan_h);
     spec.channelnames.clear();
     for (const Layer& layer : opts.stock.layers)
         spec.channelnames.push_back(layer.name);
@@ -216,7 +303,7 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
                      roi.height(), nlayers);
         return false;
     }
-    if (Status s = render_negative(opts.stock, opts.scene, view, settings, density, stats);
+    if (Status s = render_negative(opts.stock, scene, view, settings, density, stats);
         !s) {
         dst.errorfmt("filmgrain: {}", s.message());
         return false;

@@ -273,7 +273,13 @@ bool roi_read_window(const FilmgrainOptions& opts, const FilmgrainCommand& cmd,
     if (!cmd.has_roi)
         return false;
     // The frame is the display window, else the data window (as the
-    // operator's source_frame).
+    // operator's). A plate with overscan (data beyond the display window)
+    // is read whole.
+    if (spec.full_width > 0 && spec.full_height > 0
+        && (spec.x < spec.full_x || spec.y < spec.full_y
+            || spec.x + spec.width > spec.full_x + spec.full_width
+            || spec.y + spec.height > spec.full_y + spec.full_height))
+        return false;
     const bool full_w = spec.full_width > 0, full_h = spec.full_height > 0;
     const int64_t fx = full_w ? spec.full_x : spec.x, fy = full_h ? spec.full_y : spec.y;
     const int64_t fw = full_w ? spec.full_width : spec.width;
@@ -772,8 +778,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     RenderSettings geometry_settings;
     geometry_settings.scan_width  = opts.scan_width;
     geometry_settings.scan_height = opts.scan_height;
-    if (Status s = scan_geometry(opts.scene, header.width, header.height, geometry_settings,
-                                 report.scan);
+    const int64_t frame_w = header.full_width > 0 ? header.full_width : header.width;
+    const int64_t frame_h = header.full_height > 0 ? header.full_height : header.height;
+    if (Status s = scan_geometry(opts.scene, frame_w, frame_h, geometry_settings, report.scan);
         !s)
         return s;
     const OIIO::ROI data = dst.roi();

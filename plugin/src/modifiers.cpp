@@ -240,11 +240,18 @@ bool parse_roi(std::string_view v, FilmgrainCommand& cmd, std::string& why)
             why = "must be four numbers separated by commas";
             return false;
         }
-        const std::string_view part = v.substr(0, comma);
+        std::string_view part = v.substr(0, comma);
+        // x and y may be negative: the overscan of a plate whose data
+        // window reaches beyond its display window lies there.
+        const bool negative = i < 2 && !part.empty() && part.front() == '-';
+        if (negative)
+            part.remove_prefix(1);
         if (!parse_int_in(part, i < 2 ? 0 : 1, kMaxPixels, values[i], why)) {
             why = std::string(names[i]) + ": " + why;
             return false;
         }
+        if (negative)
+            values[i] = -values[i];
         v = i < 3 ? v.substr(comma + 1) : std::string_view();
     }
     if (values[0] + values[2] > kMaxPixels || values[1] + values[3] > kMaxPixels) {
@@ -427,7 +434,10 @@ const Modifier kModifiers[] = {
     { "scan", "WxH|W",
       "scan (output) size in pixels over the whole frame; W alone keeps the frame's aspect",
       default_scan, parse_scan },
-    { "roi", "X,Y,W,H", "region of the scan to render, scan pixels (must lie inside the scan)",
+    { "roi", "X,Y,W,H",
+      "region of the scan to render, scan pixels from the display window's corner (must lie "
+      "inside the scan and its overscan: a plate's data window beyond its display window is "
+      "rendered too, at negative coordinates and beyond the scan)",
       default_roi, parse_roi },
     { "engine", "auto|exact|fast",
       "simulation engine: exact is the reference (every photon and event, exact coverage); "

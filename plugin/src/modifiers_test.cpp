@@ -76,6 +76,8 @@ TEST(Modifiers, Forms)
     EXPECT_EQ(parse_ok("--filmgrain:exposure=1e-1").scene.exposure_stops, 0.1);
     EXPECT_EQ(parse_ok("--filmgrain:stock=dir/my=stock.json").stock, "dir/my=stock.json");
     EXPECT_EQ(parse_ok("--filmgrain:roi=0,0,1,1").roi_width, 1);
+    EXPECT_EQ(parse_ok("--filmgrain:roi=-16,-8,1,1").roi_x, -16);
+    EXPECT_EQ(parse_ok("--filmgrain:roi=-16,-8,1,1").roi_y, -8);
     EXPECT_FALSE(parse_ok("--filmgrain").scene.frame.has_value());
     EXPECT_EQ(parse_ok("--filmgrain:frame=1001").scene.frame, 1001);
     EXPECT_EQ(parse_ok("--filmgrain:frame=-5").scene.frame, -5);
@@ -122,7 +124,8 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:scan=10x10x10", { "scan=10x10x10", "height", "WxH" } },
         { "--filmgrain:scan=3000000000", { "scan=3000000000", "too large", "WxH" } },
         { "--filmgrain:roi=0,0,0,10", { "roi=0,0,0,10", "width", "at least 1" } },
-        { "--filmgrain:roi=-1,0,5,5", { "roi=-1,0,5,5", "x:", "X,Y,W,H" } },
+        { "--filmgrain:roi=--1,0,5,5", { "roi=--1,0,5,5", "x:", "X,Y,W,H" } },
+        { "--filmgrain:roi=0,0,-5,5", { "roi=0,0,-5,5", "width:", "X,Y,W,H" } },
         { "--filmgrain:roi=0,0,5", { "roi=0,0,5", "four numbers", "X,Y,W,H" } },
         { "--filmgrain:roi=0,0,5,5,5", { "roi=0,0,5,5,5", "four numbers", "X,Y,W,H" } },
         { "--filmgrain:roi=2147483647,0,1,1", { "roi=", "x + width", "" } },

@@ -3,6 +3,7 @@ the wedge, NaN/Inf input, colour spaces."""
 
 import json
 import math
+import os
 
 import numpy as np
 import OpenImageIO as oiio
@@ -252,3 +253,53 @@ def test_compression_modifier_and_progress(run, tmp_path, ramp_exr):
     # Without --progress (stderr is not a terminal): no progress line.
     r = run(ramp_exr, f"--filmgrain:{FAST}", "-o", tmp_path / "p.exr")
     assert "%" not in r.stderr
+
+
+def overscan_plate(path, width=72, height=56, margin=8):
+    """A plate with overscan: a (width + 2 margin) x (height + 2 margin) data
+    window around a width x height display window at (0, 0)."""
+    spec = oiio.ImageSpec(width + 2 * margin, height + 2 * margin, 3, "float")
+    spec.x, spec.y = -margin, -margin
+    spec.full_x, spec.full_y, spec.full_width, spec.full_height = 0, 0, width, height
+    pixels = rgb_ramp(width + 2 * margin, height + 2 * margin)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec), out.geterror()
+    assert out.write_image(pixels), out.geterror()
+    out.close()
+    return pixels
+
+
+def test_overscan_is_rendered_as_film_and_keeps_both_windows(run, dirs):
+    """An EXR whose data window reaches beyond its display window keeps both:
+    the overscan is film too (issue: a 288x288 plate with 16 px overscan came
+    out 256x256). A roi reaching into it is a crop of the whole render."""
+    indir, outdir = dirs
+    overscan_plate(indir / "plate.exr")
+    r = run(indir / "plate.exr", f"--filmgrain:{FAST}", "-o", outdir / "neg.exr")
+    assert r.returncode == 0, r.stderr
+    exr = Exr(outdir / "neg.exr")
+    s = exr.spec
+    assert (s.x, s.y, s.width, s.height) == (-8, -8, 88, 72)
+    assert (s.full_x, s.full_y, s.full_width, s.full_height) == (0, 0, 72, 56)
+    whole = np.stack([exr.channels[n] for n in ("R", "G", "B")])
+    # The overscan holds developed film, not zeros: its densities look like
+    # the display window's beside it.
+    assert np.all(whole[:, :, :8].mean(axis=(1, 2)) > 0.5 * whole[:, :, 8:16].mean(axis=(1, 2)))
+    r = run(indir / "plate.exr", f"--filmgrain:{FAST}:roi=-8,-8,20,12", "-o", outdir / "roi.exr")
+    assert r.returncode == 0, r.stderr
+    roi = Exr(outdir / "roi.exr")
+    assert (roi.spec.x, roi.spec.y, roi.spec.width, roi.spec.height) == (-8, -8, 20, 12)
+    part = np.stack([roi.channels[n] for n in ("R", "G", "B")])
+    assert np.array_equal(part, whole[:, 0:12, 0:20])
+    # Twice the scan: twice the overscan, in whole scan pixels.
+    r = run(indir / "plate.exr", f"--filmgrain:{FAST}:scan=144", "-o", outdir / "big.exr")
+    assert r.returncode == 0, r.stderr
+    s = Exr(outdir / "big.exr").spec
+    assert (s.x, s.y, s.width, s.height, s.full_width, s.full_height) == (-16, -16, 176, 144,
+                                                                          144, 112)
+    # A scan that would cut a scan pixel, and a roi beyond the overscan.
+    r = run(indir / "plate.exr", f"--filmgrain:{FAST}:scan=100", "-o", outdir / "bad.exr")
+    assert r.returncode == 1 and "whole number of scan pixels" in r.stderr, r.stderr
+    r = run(indir / "plate.exr", f"--filmgrain:{FAST}:roi=-9,0,4,4", "-o", outdir / "bad.exr")
+    assert r.returncode == 1 and "with its overscan" in r.stderr, r.stderr
+    assert sorted(os.listdir(outdir)) == ["big.exr", "neg.exr", "roi.exr"]

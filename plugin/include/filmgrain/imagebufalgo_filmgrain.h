@@ -11,7 +11,8 @@
 //   stored on dst (read it with dst.geterror()) and the function returns
 //   false; the message names the field, its value and the rule it broke.
 // - ROI: in *scan* pixels (the output grid over the whole film frame), not
-//   in src pixels. The default (undefined) ROI means the whole scan. The
+//   in src pixels, (0, 0) at the display window's corner. The default
+//   (undefined) ROI means the whole scan with its overscan (below). The
 //   ROI's channel and z ranges are ignored: every layer is always written.
 // - Threads: nthreads = 0 means OIIO's global default (the "threads"
 //   attribute, all hardware threads unless changed); nthreads > 0 uses that
@@ -102,15 +103,21 @@ namespace IBA {
 ///   2-channel images are an error. Any pixel type (converted to float). The
 ///   film frame covers src's display (full) window (its data window when no
 ///   display window is set): opts.scene.frame_width_mm across it, square
-///   pixels; pixels outside the data window are black. Only the pixels under
+///   pixels; pixels outside the data window are black. Overscan: where the
+///   data window reaches beyond the display window, that margin is film too
+///   (same pitch) and is rendered: the scan grows by the margin in scan
+///   pixels (it must come to whole scan pixels, else an error), at negative
+///   coordinates and beyond the display scan, as in the EXR; the film's
+///   grain is then laid out from the overscan's corner. Only the pixels under
 ///   the ROI plus a grain radius are read (a cache-backed src is read only
 ///   there); float pixels in memory are used in place, not copied. NaN and
 ///   Inf channels expose nothing and are counted in
 ///   stats->input.nonfinite_pixels.
 /// dst: (re)allocated as float with one channel per stock layer, named
 ///   after the layer (stock order): negative density, -log10(transmittance)
-///   plus the stock's base density. Its full (display) window is the whole
-///   scan, its data window the ROI.
+///   plus the stock's base density. Its full (display) window is the scan
+///   of src's display window, its data window the ROI (by default the whole
+///   scan and its overscan).
 ///   Metadata on dst's spec (strings unless noted): filmgrain:quantity,
 ///   filmgrain:stock (the full stock as JSON), filmgrain:stock_name,
 ///   filmgrain:seed (decimal: 64-bit), filmgrain:frame (decimal, only for
