@@ -25,6 +25,14 @@ FilmgrainOptions::FilmgrainOptions()
     }
 }
 
+bool has_overscan(const OIIO::ImageSpec& spec)
+{
+    return spec.full_width > 0 && spec.full_height > 0
+           && (spec.x < spec.full_x || spec.y < spec.full_y
+               || int64_t(spec.x) + spec.width > int64_t(spec.full_x) + spec.full_width
+               || int64_t(spec.y) + spec.height > int64_t(spec.full_y) + spec.full_height);
+}
+
 namespace IBA {
 
 namespace {
@@ -90,7 +98,7 @@ bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMap
     const int64_t x0 = std::min<int64_t>(fx, spec.x), y0 = std::min<int64_t>(fy, spec.y);
     const int64_t x1 = std::max<int64_t>(fx + fw, int64_t(spec.x) + spec.width);
     const int64_t y1 = std::max<int64_t>(fy + fh, int64_t(spec.y) + spec.height);
-    m.overscan = x0 < fx || y0 < fy || x1 > fx + fw || y1 > fy + fh;
+    m.overscan = has_overscan(spec);
     if (!m.overscan) {
         m.film_x = fx, m.film_y = fy, m.film_w = fw, m.film_h = fh;
         m.film_width_mm = opts.scene.frame_width_mm;

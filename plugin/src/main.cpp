@@ -275,10 +275,7 @@ bool roi_read_window(const FilmgrainOptions& opts, const FilmgrainCommand& cmd,
     // The frame is the display window, else the data window (as the
     // operator's). A plate with overscan (data beyond the display window)
     // is read whole.
-    if (spec.full_width > 0 && spec.full_height > 0
-        && (spec.x < spec.full_x || spec.y < spec.full_y
-            || spec.x + spec.width > spec.full_x + spec.full_width
-            || spec.y + spec.height > spec.full_y + spec.full_height))
+    if (has_overscan(spec))
         return false;
     const bool full_w = spec.full_width > 0, full_h = spec.full_height > 0;
     const int64_t fx = full_w ? spec.full_x : spec.x, fy = full_h ? spec.full_y : spec.y;

@@ -139,6 +139,10 @@ OIIO::ImageBuf filmgrain(const OIIO::ImageBuf& src, const FilmgrainOptions& opts
 
 }  // namespace IBA
 
+/// True when `spec`'s data window reaches beyond its display window
+/// (overscan: rendered as film too, see IBA::filmgrain).
+bool has_overscan(const OIIO::ImageSpec& spec);
+
 /// Value of the filmgrain:quantity attribute: what the pixels mean.
 inline constexpr const char* kFilmgrainQuantity
     = "negative density: -log10(transmittance) + base density";
