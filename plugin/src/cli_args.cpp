@@ -173,6 +173,14 @@ const std::vector<OptionSpec>& option_table()
               a.skip_missing = true;
               return Status();
           } },
+        { "--dry-run", nullptr, "",
+          "Render nothing: print on stdout, one JSON object per line, each image the command "
+          "would render (frame, input, output, stats, preview, input_exists, settings_hash, "
+          "up_to_date as --skip-existing judges it) and exit. For scripts and farms",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.dry_run = true;
+              return Status();
+          } },
         { "--stats", nullptr, "FILE.json",
           "Also write render statistics as JSON (timings, grain counts, input pixels)",
           [](CliArgs& a, const std::string&, const char* v) {

@@ -31,6 +31,7 @@ struct CliArgs {
     std::string frames;  ///< --frames LIST (empty: not given)
     bool skip_existing = false;  ///< --skip-existing
     bool skip_missing  = false;  ///< --skip-missing
+    bool dry_run       = false;  ///< --dry-run
 
     std::string stats_path;  ///< --stats FILE.json
     std::string preview_path;  ///< --preview FILE.png

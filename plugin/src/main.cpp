@@ -850,6 +850,29 @@ int render(const CliArgs& a, const Console& con)
     ctx.opts.scan_height    = cmd.scan_height;
     ctx.opts.tile_size_px   = cmd.tile_size_px;
 
+    if (a.dry_run) {
+        for (const FrameJob& job : jobs) {
+            FilmgrainOptions opts = ctx.opts;
+            if (job.frame)
+                opts.scene.frame = *job.frame;
+            const std::string hash = settings_hash(ctx, opts, job);
+            std::error_code ec;
+            const nlohmann::ordered_json line
+                = { { "frame", job.frame ? nlohmann::ordered_json(*job.frame)
+                                         : nlohmann::ordered_json(nullptr) },
+                    { "input", a.wedge ? std::string("wedge") : job.input },
+                    { "output", job.output },
+                    { "stats", job.stats },
+                    { "preview", job.preview },
+                    { "input_exists", a.wedge || fs::exists(job.input, ec) },
+                    { "settings_hash", hash },
+                    { "up_to_date", up_to_date(job, hash) } };
+            std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace)
+                      << "\n";
+        }
+        return 0;
+    }
+
     const bool sequence = jobs.front().frame.has_value();
     size_t rendered = 0, skipped = 0, missing = 0;
     for (size_t i = 0; i < jobs.size(); ++i) {

@@ -10,7 +10,7 @@ MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "width_m
              "tile"]
 
 OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",
-           "--frames", "--skip-existing", "--skip-missing", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
+           "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
            "--list-stocks", "--print-stock", "--version", "--help"]
 
 

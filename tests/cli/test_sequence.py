@@ -1,6 +1,7 @@
 """Image sequences: --frames, frame patterns, per-frame grain, --skip-existing,
 --skip-missing, and a sequence killed mid-frame (README "Sequences")."""
 
+import json
 import os
 import select
 import signal
@@ -227,3 +228,20 @@ def test_progress_names_the_frame(run, dirs):
     r = run("--wedge", "--frames", "1-2", f"--filmgrain:stock=paper:{FAST}", "-o",
             outdir / "q.#.exr", "-q")
     assert r.returncode == 0 and r.stderr == ""
+
+
+def test_dry_run_lists_the_frames_and_what_is_up_to_date(run, dirs):
+    indir, outdir = dirs
+    plates(indir, [1, 2])
+    args = [indir / "plate.####.exr", "--frames", "1-3", f"--filmgrain:{FAST}", "-o",
+            outdir / "n.####.exr"]
+    assert run(*args[:2], "1", *args[3:]).returncode == 0  # frame 1 rendered
+    r = run(*args, "--dry-run")
+    assert r.returncode == 0, r.stderr
+    lines = [json.loads(line) for line in r.stdout.splitlines()]
+    assert [d["frame"] for d in lines] == [1, 2, 3]
+    assert [d["input_exists"] for d in lines] == [True, True, False]
+    assert [d["up_to_date"] for d in lines] == [True, False, False]
+    assert lines[0]["settings_hash"] == Exr(outdir / "n.0001.exr").attr("filmgrain:settings_hash")
+    assert lines[1]["output"] == str(outdir / "n.0002.exr")
+    assert listing(outdir) == ["n.0001.exr"]  # nothing rendered
