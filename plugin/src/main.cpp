@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
@@ -434,11 +435,19 @@ Status check_output_size(const FilmgrainOptions& opts, const OIIO::ImageSpec& in
     RenderSettings settings;
     settings.scan_width  = opts.scan_width;
     settings.scan_height = opts.scan_height;
+    // The scan covers the display window (else the data window); with
+    // overscan the output is the data window's scan, larger.
+    const int64_t frame_w = input.full_width > 0 ? input.full_width : input.width;
+    const int64_t frame_h = input.full_height > 0 ? input.full_height : input.height;
     ScanGeometry scan;
-    if (Status s = scan_geometry(opts.scene, input.width, input.height, settings, scan); !s)
+    if (Status s = scan_geometry(opts.scene, frame_w, frame_h, settings, scan); !s)
         return s;
-    const int64_t w = cmd.has_roi ? cmd.roi_width : scan.width;
-    const int64_t h = cmd.has_roi ? cmd.roi_height : scan.height;
+    const double grow_x = has_overscan(input) ? double(input.width) / double(frame_w) : 1.0;
+    const double grow_y = has_overscan(input) ? double(input.height) / double(frame_h) : 1.0;
+    const int64_t w = cmd.has_roi ? cmd.roi_width
+                                  : static_cast<int64_t>(std::ceil(scan.width * std::max(1.0, grow_x)));
+    const int64_t h = cmd.has_roi ? cmd.roi_height
+                                  : static_cast<int64_t>(std::ceil(scan.height * std::max(1.0, grow_y)));
     const int64_t layers = static_cast<int64_t>(opts.stock.layers.size());
     if (w > kMaxOutputPixels || h > kMaxOutputPixels || w * h > kMaxOutputPixels
         || w * h * layers > kMaxOutputValues)
