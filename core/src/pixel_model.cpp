@@ -11,14 +11,12 @@ namespace filmgrain {
 
 namespace {
 
-/// Grain sizes by quadrature over the normal score z of ln d: nodes on
-/// [-4, 4] (the mass beyond, 6e-5, is left out), Gaussian weights summing
-/// to 1.
-constexpr int kSizeNodes = 65;
-constexpr double kSizeZ  = 4.0;
+/// size_quadrature's range and nodes (145: step 1/8).
+constexpr double kSizeZ  = kSizeQuadratureZ;
+constexpr int kSizeNodes = 145;
 /// Distances h at which the covariance is integrated (midpoint rule on
 /// [0, largest diameter]).
-constexpr int kDistanceNodes = 256;
+constexpr int kDistanceNodes = 512;
 /// The exposure values tabulated: log-spaced, 16 per octave, from 2^-16 to
 /// 2^12 times grey (0.18); v = 0 is its own node. A property of the scene,
 /// never of the pixels, so that every ROI uses the same table.
@@ -44,6 +42,36 @@ double pixel_develop_probability(const PixelPopulation& p, double lambda)
     return p.table->probability(static_cast<uint64_t>(std::llround(n)));
 }
 
+std::vector<SizeNode> size_quadrature(const Population& population)
+{
+    if (!(population.diameter_log_sigma > 0.0))
+        return { SizeNode { 0.0, 1.0 } };
+    std::vector<SizeNode> nodes(kSizeNodes);
+    const double dz = 2.0 * kSizeZ / (kSizeNodes - 1);
+    for (int k = 0; k < kSizeNodes; ++k) {
+        const double z = -kSizeZ + k * dz;
+        const double w = std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * dz;
+        nodes[static_cast<size_t>(k)] = { z, (k == 0 || k == kSizeNodes - 1) ? 0.5 * w : w };
+    }
+    return nodes;
+}
+
+double coverage_exponent(const std::vector<PixelPopulation>& populations, double v)
+{
+    double k = 0.0;
+    for (const PixelPopulation& pp : populations) {
+        double sum = 0.0;
+        for (const SizeNode& node : size_quadrature(*pp.population)) {
+            const double r_um  = pp.grains->radius_at_z_um(node.z);
+            const double a_um2 = M_PI * r_um * r_um;
+            sum += node.weight * a_um2
+                   * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
+        }
+        k += pp.population->grains_per_um2 * sum;
+    }
+    return k;
+}
+
 namespace {
 
 /// The quadrature and the lens areas of a layer's populations, prepared once.
@@ -55,19 +83,15 @@ public:
         double h_max_um = 0.0;
         for (const PixelPopulation& p : pops) {
             Sizes sz;
-            const int nodes = p.population->diameter_log_sigma > 0.0 ? kSizeNodes : 1;
-            double wsum = 0.0;
-            for (int k = 0; k < nodes; ++k) {
-                const double z    = nodes > 1 ? -kSizeZ + 2.0 * kSizeZ * k / (nodes - 1) : 0.0;
-                const double w    = std::exp(-0.5 * z * z);
-                const double r_um = p.grains->radius_at_z_um(z);
+            for (const SizeNode& node : size_quadrature(*p.population)) {
+                const double r_um = p.grains->radius_at_z_um(node.z);
                 sz.r_um.push_back(r_um);
-                sz.w.push_back(w);
-                wsum += w;
-                h_max_um = std::max(h_max_um, 2.0 * r_um);
+                sz.w.push_back(node.weight);
+                // Lens areas out to the largest grain that carries weight
+                // (z = 9 would stretch the distance grid for nothing).
+                if (node.weight > 1e-15)
+                    h_max_um = std::max(h_max_um, 2.0 * r_um);
             }
-            for (double& w : sz.w)
-                w /= wsum;
             m_sizes.push_back(std::move(sz));
         }
         m_dh_um = h_max_um / kDistanceNodes;

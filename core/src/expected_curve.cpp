@@ -1,0 +1,240 @@
+// The expected characteristic curve of each layer (filmgrain/expected_curve.h):
+// MODEL.md 5's Boolean-model mean transmittance over the layer's exposure
+// value, assembled from the pieces the fast engine draws from (DevelopTable,
+// DevelopCurve and its P(develop | mean photons), PopulationGrains' radius
+// at each size quantile).
+#include "filmgrain/expected_curve.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "develop_curve.h"
+#include "development.h"
+#include "exposure.h"
+#include "geometry.h"
+#include "kinetics_table.h"
+#include "pixel_model.h"
+#include "rng.h"
+#include "sampling.h"
+
+namespace filmgrain {
+
+namespace {
+
+/// log10(e): D = 0.434 K for a Boolean model of coverage exponent K.
+constexpr double kLog10E = 0.43429448190325176;
+/// The points of a curve: v = 0, then kPerOctave per octave from
+/// 2^-kOctavesBelow to 2^kOctavesAbove times grey (the pixel model's
+/// range and spacing).
+constexpr int kOctavesBelow = 16, kOctavesAbove = 12, kPerOctave = 16;
+/// E[T] of a uniform patch of one layer at exposure value v (MODEL.md 5),
+/// with the pixel model's size quadrature and P(develop | mean photons).
+double mean_transmittance(const std::vector<PixelPopulation>& pops, double v)
+{
+    return std::exp(-coverage_exponent(pops, v));
+}
+
+double clamp_density(double transmittance, double base, double max_density)
+{
+    return base - std::log10(std::max(transmittance, std::pow(10.0, -max_density)));
+}
+
+}  // namespace
+
+double ExpectedCurve::transmittance_at(double value) const
+{
+    if (!(value > 0.0) || points.size() < 2)
+        return points.front().transmittance;
+    const double lv = std::log(value);
+    if (lv <= std::log(points[1].value))
+        return points[1].transmittance;  // as the pixel model: its first node
+    if (lv >= std::log(points.back().value))
+        return points.back().transmittance;
+    const double step = std::log(points[2].value / points[1].value);
+    const double t    = (lv - std::log(points[1].value)) / step;
+    const size_t i    = std::min(static_cast<size_t>(t), points.size() - 3);
+    const double f    = t - static_cast<double>(i);
+    return points[i + 1].transmittance
+           + f * (points[i + 2].transmittance - points[i + 1].transmittance);
+}
+
+double ExpectedCurve::density_at(double value) const
+{
+    return clamp_density(transmittance_at(value), base_density, max_density);
+}
+
+double ExpectedCurve::transmittance_slope_at(double value) const
+{
+    if (!(value > 0.0) || points.size() < 3)
+        return 0.0;
+    const double lv = std::log(value);
+    if (lv <= std::log(points[1].value) || lv >= std::log(points.back().value))
+        return 0.0;
+    const double step = std::log(points[2].value / points[1].value);
+    const size_t i    = std::min(
+        static_cast<size_t>((lv - std::log(points[1].value)) / step), points.size() - 3);
+    // T is linear in ln v between points: dT/dv = (dT / d ln v) / v.
+    return (points[i + 2].transmittance - points[i + 1].transmittance) / step / value;
+}
+
+double ExpectedCurve::gamma_at(double value) const
+{
+    const double t = transmittance_at(value);
+    if (!(value > 0.0) || !(t > 0.0))
+        return 0.0;
+    // D = -log10 T: dD/dlog10 v = -(v / T) dT/dv.
+    return -value / t * transmittance_slope_at(value);
+}
+
+double ExpectedCurve::value_at_density(double density) const
+{
+    if (!std::isfinite(density) || points.size() < 2)
+        return 0.0;
+    // Non-increasing E[T] (running minimum from v = 0): the table's Monte
+    // Carlo noise cannot fold the inverse.
+    const double t_target = std::pow(10.0, -(density - base_density));
+    double t_prev         = points.front().transmittance;
+    if (t_target >= t_prev)
+        return 0.0;
+    double v_prev = 0.0;
+    for (size_t i = 1; i < points.size(); ++i) {
+        const double t = std::min(points[i].transmittance, t_prev);
+        if (t <= t_target) {
+            if (i == 1 || t_prev <= t)
+                return points[i].value;
+            // Linear in ln v between points i - 1 and i (as transmittance_at).
+            const double f = (t_prev - t_target) / (t_prev - t);
+            return std::exp(std::log(v_prev) + f * std::log(points[i].value / v_prev));
+        }
+        t_prev = t;
+        v_prev = points[i].value;
+    }
+    return points.back().value;
+}
+
+Status expected_curves(const Stock& stock, const SceneSettings& scene,
+                       const ExpectedCurveOptions& options, std::vector<ExpectedCurve>& out)
+{
+    out.clear();
+    if (Status s = stock.validate(); !s)
+        return s;
+    if (Status s = scene.validate(); !s)
+        return s;
+    if (!(options.target_standard_error > 0.0 && options.target_standard_error <= 0.1))
+        return Status::errorf("expected curve: target_standard_error = ",
+                              options.target_standard_error, " is outside (0, 0.1]");
+    if (options.max_photons < 64 || options.max_photons > 65536)
+        return Status::errorf("expected curve: max_photons = ", options.max_photons,
+                              " is outside [64, 65536]");
+    if (!options.fog_only)
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
+                if (stock.layers[l].populations[p].rate_area_exponent != 0.0)
+                    return Status::errorf(
+                        "expected curve: layers[", l, "].populations[", p,
+                        "].rate_area_exponent = ",
+                        stock.layers[l].populations[p].rate_area_exponent,
+                        ": P(develop | N) then depends on the grain's size, so the layer has no "
+                        "single tabulated curve (only 0 is supported)");
+
+    const Development development(stock);
+    const double lxs_per_value
+        = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
+    // Tables of P(develop | N), one per distinct set of rates (MODEL.md 3-4).
+    // fog_only reads P at 0 photons only (exact: the fog probability), so
+    // its tables hold the minimum.
+    struct Shared {
+        KineticsRates rates;
+        std::unique_ptr<DevelopTable> table;
+        std::unique_ptr<DevelopCurve> curve;
+    };
+    std::vector<Shared> shared;
+    const auto tables_for = [&](const Population& pop) -> const Shared& {
+        for (const Shared& s : shared)
+            if (s.rates.k_pair_per_s == pop.k_pair_per_s && s.rates.k_join_per_s == pop.k_join_per_s
+                && s.rates.k_loss_per_s == pop.k_loss_per_s)
+                return s;
+        Shared s;
+        s.rates = { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s };
+        DevelopTable::Options o;
+        o.max_photons           = options.fog_only ? 64 : options.max_photons;
+        o.target_standard_error = options.fog_only ? 0.1 : options.target_standard_error;
+        o.min_samples           = options.fog_only ? 32 : o.min_samples;
+        o.stream_key            = hash_ids(0xe7c0ffee, shared.size());
+        o.nthreads              = options.nthreads;
+        s.table = std::make_unique<DevelopTable>(s.rates, scene.shutter_s, development, o);
+        s.curve = std::make_unique<DevelopCurve>(*s.table, options.fog_only ? 2 : 4096);
+        shared.push_back(std::move(s));
+        return shared.back();
+    };
+    // Build every table first (shared.push_back may move the elements).
+    for (const Layer& layer : stock.layers)
+        for (const Population& pop : layer.populations)
+            tables_for(pop);
+
+    const double grey = kGreyValue;
+    for (size_t l = 0; l < stock.layers.size(); ++l) {
+        const Layer& layer = stock.layers[l];
+        std::vector<PopulationGrains> grains;
+        grains.reserve(layer.populations.size());
+        std::vector<PixelPopulation> pops;
+        double error_k = 0.0;  // bound on the error of the coverage exponent K
+        for (size_t p = 0; p < layer.populations.size(); ++p) {
+            const Population& pop = layer.populations[p];
+            const Shared& s       = tables_for(pop);
+            grains.emplace_back(pop, 0, static_cast<uint32_t>(l), static_cast<uint32_t>(p));
+            pops.push_back({ &pop, &grains.back(),
+                             pop.quantum_efficiency * kPhotonsPerUm2PerLxs * lxs_per_value,
+                             s.curve.get(), s.table.get() });
+            // K = sum n E[a P]: an error e in P moves it by at most n E[a] e;
+            // the grains beyond the quadrature (z > 9) hold at most the
+            // share Phi(2 s - 9) of n E[a]; the trapezoid rule's own error
+            // on this smooth, Gaussian-damped integrand is far below both.
+            const double n_area = pop.grains_per_um2 * grains.back().mean_area_um2();
+            const double p_error
+                = options.fog_only ? 0.0
+                                   : 2.0 * s.table->max_standard_error()
+                                         + s.table->max_interpolation_error()
+                                         + s.curve->max_interpolation_error();
+            error_k += n_area
+                       * (p_error + normal_upper_tail(kSizeQuadratureZ - 2.0 * pop.diameter_log_sigma));
+        }
+        ExpectedCurve curve;
+        curve.layer        = layer.name;
+        curve.base_density = stock.base_density;
+        curve.max_density  = stock.max_density;
+        const auto point = [&](double v) {
+            CurvePoint c;
+            c.value         = v;
+            c.exposure_lxs  = v * lxs_per_value;
+            c.transmittance = mean_transmittance(pops, v);
+            c.density       = clamp_density(c.transmittance, stock.base_density,
+                                            stock.max_density);
+            return c;
+        };
+        curve.points.push_back(point(0.0));
+        double interpolation = 0.0;  // largest relative error of E[T] between points
+        if (!options.fog_only) {
+            const double log_v0 = std::log(grey) - kOctavesBelow * std::log(2.0);
+            const double step   = std::log(2.0) / kPerOctave;
+            for (int i = 0; i <= (kOctavesBelow + kOctavesAbove) * kPerOctave; ++i) {
+                curve.points.push_back(point(std::exp(log_v0 + i * step)));
+                if (i == 0)
+                    continue;
+                // Linear interpolation in ln v errs most half-way.
+                const CurvePoint& a = curve.points[curve.points.size() - 2];
+                const CurvePoint& b = curve.points.back();
+                const double mid    = mean_transmittance(pops, std::exp(log_v0 + (i - 0.5) * step));
+                interpolation = std::max(
+                    interpolation, std::fabs(0.5 * (a.transmittance + b.transmittance) - mid) / mid);
+            }
+        }
+        // d(-log10 T) = 0.434 dT / T, and dK = -dT / T.
+        curve.density_error = kLog10E * (error_k + interpolation);
+        out.push_back(std::move(curve));
+    }
+    return {};
+}
+
+}  // namespace filmgrain
