@@ -1,6 +1,6 @@
 // filmgrain: per-grain film simulation.
-// OpenColorIO input conversion (see filmgrain/ocio.h). A thin adapter: it
-// loads a config, builds one CPU processor and runs it; it holds no physics.
+// OpenColorIO conversions (see filmgrain/ocio.h). A thin adapter: it loads a
+// config, builds one CPU processor and runs it; it holds no physics.
 #include <filmgrain/ocio.h>
 
 #include <OpenColorIO/OpenColorIO.h>
@@ -103,6 +103,30 @@ std::vector<std::string> known_names(const OCIO::Config& config)
     return names;
 }
 
+/// Runs `cpu` over `count` pixels whose RGB floats start at `first` and are
+/// `stride` floats apart, in chunks. OCIO cannot fail here for the
+/// descriptors we build; should it throw anyway, the chunk's RGB is set to
+/// NaN so the failure cannot pass unnoticed (no exception leaves the library
+/// and apply_* returns void).
+void run_cpu(const OCIO::ConstCPUProcessorRcPtr& cpu, float* first, size_t count, int stride)
+{
+    const ptrdiff_t x_stride_bytes = ptrdiff_t(stride) * ptrdiff_t(sizeof(float));
+    for (size_t done = 0; done < count; done += k_chunk_pixels) {
+        const size_t n = std::min(k_chunk_pixels, count - done);
+        float* p       = first + done * size_t(stride);
+        try {
+            OCIO::PackedImageDesc desc(p, long(n), 1, OCIO::CHANNEL_ORDERING_RGB,
+                                       OCIO::BIT_DEPTH_F32, ptrdiff_t(sizeof(float)),
+                                       x_stride_bytes, x_stride_bytes * ptrdiff_t(n));
+            cpu->apply(desc);
+        } catch (...) {
+            const float nan = std::numeric_limits<float>::quiet_NaN();
+            for (size_t i = 0; i < n; ++i)
+                std::fill_n(p + i * size_t(stride), 3, nan);
+        }
+    }
+}
+
 std::string join(const std::vector<std::string>& names)
 {
     std::string s;
@@ -123,32 +147,7 @@ struct InputConverter::Impl {
     OCIO::ConstCPUProcessorRcPtr cpu;
     bool noop = true;
 
-    /// Runs the processor over `count` pixels whose RGB floats start at
-    /// `first` and are `stride` floats apart. OCIO cannot fail here for the
-    /// descriptors we build; should it throw anyway, the chunk's RGB is set to
-    /// NaN so the failure cannot pass unnoticed (no exception leaves the
-    /// library and apply_* returns void).
-    void run(float* first, size_t count, int stride) const
-    {
-        const ptrdiff_t x_stride_bytes = ptrdiff_t(stride) * ptrdiff_t(sizeof(float));
-        for (size_t done = 0; done < count; done += k_chunk_pixels) {
-            const size_t n = std::min(k_chunk_pixels, count - done);
-            float* p       = first + done * size_t(stride);
-            try {
-                OCIO::PackedImageDesc desc(p, long(n), 1,
-                                           OCIO::CHANNEL_ORDERING_RGB,
-                                           OCIO::BIT_DEPTH_F32,
-                                           ptrdiff_t(sizeof(float)),
-                                           x_stride_bytes,
-                                           x_stride_bytes * ptrdiff_t(n));
-                cpu->apply(desc);
-            } catch (...) {
-                const float nan = std::numeric_limits<float>::quiet_NaN();
-                for (size_t i = 0; i < n; ++i)
-                    std::fill_n(p + i * size_t(stride), 3, nan);
-            }
-        }
-    }
+    void run(float* first, size_t count, int stride) const { run_cpu(cpu, first, count, stride); }
 };
 
 InputConverter::InputConverter(std::unique_ptr<Impl> impl)
@@ -245,6 +244,173 @@ const std::string& InputConverter::source_colorspace() const
 const std::string& InputConverter::scene_linear_colorspace() const
 {
     return m_impl->scene_linear_colorspace;
+}
+
+// --- Converter ---------------------------------------------------------------
+
+struct Converter::Impl {
+    ConfigInfo info;
+    std::string source, destination;
+    OCIO::ConstCPUProcessorRcPtr cpu;
+    bool noop = true;
+};
+
+Converter::Converter(std::unique_ptr<Impl> impl)
+    : m_impl(std::move(impl))
+{
+}
+
+Converter::~Converter() = default;
+
+namespace {
+
+/// The displays of a config, or the views of one display, for messages.
+std::vector<std::string> display_names(const OCIO::Config& config)
+{
+    std::vector<std::string> names;
+    for (int i = 0; i < config.getNumDisplays(); ++i)
+        names.emplace_back(config.getDisplay(i));
+    return names;
+}
+
+std::vector<std::string> view_names(const OCIO::Config& config, const char* display)
+{
+    std::vector<std::string> names;
+    for (int i = 0; i < config.getNumViews(display); ++i)
+        names.emplace_back(config.getView(display, i));
+    return names;
+}
+
+}  // namespace
+
+Status Converter::create(const std::string& config_path, const std::string& src_colorspace,
+                         const std::string& dst_colorspace, std::unique_ptr<Converter>& out)
+{
+    out.reset();
+    LoadedConfig loaded;
+    if (Status s = load_config(config_path, loaded); !s.ok())
+        return s;
+    const OCIO::Config& config = *loaded.config;
+    try {
+        OCIO::ConstColorSpaceRcPtr cs[2];
+        const std::string* names[2] = { &src_colorspace, &dst_colorspace };
+        for (int i = 0; i < 2; ++i) {
+            cs[i] = names[i]->empty() ? nullptr : config.getColorSpace(names[i]->c_str());
+            if (!cs[i])
+                return Status::errorf("unknown colour space '", *names[i], "' in config ",
+                                      describe(loaded.info), "; known: ",
+                                      join(known_names(config)));
+        }
+        auto impl         = std::make_unique<Impl>();
+        impl->info        = loaded.info;
+        impl->source      = cs[0]->getName();
+        impl->destination = cs[1]->getName();
+        try {
+            impl->cpu = config.getProcessor(cs[0]->getName(), cs[1]->getName())
+                            ->getDefaultCPUProcessor();
+        } catch (const std::exception& e) {
+            return Status::errorf("cannot build the OCIO conversion from '", src_colorspace,
+                                  "' to '", dst_colorspace, "' in config ",
+                                  describe(loaded.info), ": ", e.what());
+        }
+        impl->noop = impl->cpu->isNoOp();
+        out.reset(new Converter(std::move(impl)));
+        return Status();
+    } catch (const std::exception& e) {
+        return Status::errorf("OCIO error converting '", src_colorspace, "' to '",
+                              dst_colorspace, "' in config ", describe(loaded.info), ": ",
+                              e.what());
+    }
+}
+
+Status Converter::create_display_view(const std::string& config_path,
+                                      const std::string& src_colorspace,
+                                      const std::string& display, const std::string& view,
+                                      std::unique_ptr<Converter>& out)
+{
+    out.reset();
+    LoadedConfig loaded;
+    if (Status s = load_config(config_path, loaded); !s.ok())
+        return s;
+    const OCIO::Config& config = *loaded.config;
+    try {
+        OCIO::ConstColorSpaceRcPtr src
+            = src_colorspace.empty() ? nullptr : config.getColorSpace(src_colorspace.c_str());
+        if (!src)
+            return Status::errorf("unknown colour space '", src_colorspace, "' in config ",
+                                  describe(loaded.info), "; known: ", join(known_names(config)));
+        const std::vector<std::string> displays = display_names(config);
+        const std::string d = display.empty() ? std::string(config.getDefaultDisplay()) : display;
+        if (std::find(displays.begin(), displays.end(), d) == displays.end())
+            return Status::errorf("unknown display '", d, "' in config ", describe(loaded.info),
+                                  "; known: ", join(displays));
+        const std::vector<std::string> views = view_names(config, d.c_str());
+        const std::string v = view.empty() ? std::string(config.getDefaultView(d.c_str())) : view;
+        if (std::find(views.begin(), views.end(), v) == views.end())
+            return Status::errorf("unknown view '", v, "' of display '", d, "' in config ",
+                                  describe(loaded.info), "; known: ", join(views));
+        auto impl         = std::make_unique<Impl>();
+        impl->info        = loaded.info;
+        impl->source      = src->getName();
+        impl->destination = d + " / " + v;
+        try {
+            impl->cpu = config.getProcessor(src->getName(), d.c_str(), v.c_str(),
+                                            OCIO::TRANSFORM_DIR_FORWARD)
+                            ->getDefaultCPUProcessor();
+        } catch (const std::exception& e) {
+            return Status::errorf("cannot build the OCIO display transform from '",
+                                  src_colorspace, "' to display '", d, "', view '", v,
+                                  "' in config ", describe(loaded.info), ": ", e.what());
+        }
+        impl->noop = impl->cpu->isNoOp();
+        out.reset(new Converter(std::move(impl)));
+        return Status();
+    } catch (const std::exception& e) {
+        return Status::errorf("OCIO error with the display transform of '", src_colorspace,
+                              "' in config ", describe(loaded.info), ": ", e.what());
+    }
+}
+
+void Converter::apply_rgb(float* rgb, size_t npixels) const
+{
+    if (!rgb || npixels == 0 || m_impl->noop)
+        return;
+    run_cpu(m_impl->cpu, rgb, npixels, 3);
+}
+
+void Converter::apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const
+{
+    if (!pixels || npixels == 0 || nchannels < 3 || m_impl->noop)
+        return;
+    run_cpu(m_impl->cpu, pixels, npixels, nchannels);
+}
+
+bool Converter::is_noop() const { return m_impl->noop; }
+
+const ConfigInfo& Converter::config() const { return m_impl->info; }
+
+const std::string& Converter::source_name() const { return m_impl->source; }
+
+const std::string& Converter::destination_name() const { return m_impl->destination; }
+
+Status find_colorspace(const std::string& config_path, const std::string& name,
+                       std::string& resolved, ConfigInfo* info)
+{
+    resolved.clear();
+    LoadedConfig loaded;
+    if (Status s = load_config(config_path, loaded); !s.ok())
+        return s;
+    if (info)
+        *info = loaded.info;
+    try {
+        if (OCIO::ConstColorSpaceRcPtr cs
+            = name.empty() ? nullptr : loaded.config->getColorSpace(name.c_str()))
+            resolved = cs->getName();
+    } catch (const std::exception& e) {
+        return Status::errorf("OCIO error looking up colour space '", name, "' in config ",
+                              describe(loaded.info), ": ", e.what());
+    }
+    return Status();
 }
 
 const std::string& embedded_config_text()

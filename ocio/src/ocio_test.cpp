@@ -581,10 +581,17 @@ TEST_F(OcioTest, ListColourSpaces)
     auto has = [&names](const std::string& n) {
         return std::find(names.begin(), names.end(), n) != names.end();
     };
-    for (const char* n : { "lin_rec709", "ACEScg", "ACES2065-1", "sRGB", "raw",
-                           "scene_linear", "data", "aces_interchange" })
+    for (const char* n : { "lin_rec709", "ACEScg", "ACES2065-1", "ADX10", "ADX16", "sRGB",
+                           "raw", "sRGB - Display", "scene_linear", "data", "aces_interchange" })
         EXPECT_TRUE(has(n)) << n;
-    EXPECT_EQ(names.front(), "lin_rec709");  // colour spaces first, config order
+    // Colour spaces first (OCIO lists the display colour spaces before the
+    // scene ones), in config order, then the roles.
+    const auto at = [&names](const std::string& n) {
+        return std::find(names.begin(), names.end(), n) - names.begin();
+    };
+    EXPECT_LT(at("lin_rec709"), at("ACEScg"));
+    EXPECT_LT(at("ADX16"), at("raw"));
+    EXPECT_LT(at("raw"), at("scene_linear"));
 
     TempDir dir("list");
     const std::string path = write_file(dir.path() / "user.ocio", k_user_config);
@@ -592,4 +599,66 @@ TEST_F(OcioTest, ListColourSpaces)
     ASSERT_TRUE(s.ok()) << s.message();
     EXPECT_EQ(names, (std::vector<std::string> { "my_lin", "my_log", "default",
                                                  "scene_linear" }));
+}
+
+// --- Converter: ADX and the display ------------------------------------------
+
+using filmgrain::ocio::Converter;
+
+TEST_F(OcioTest, EmbeddedAdxSpacesAreOciosBuiltinAdxToAces)
+{
+    // The config's ADX16 -> ACES2065-1 goes through its reference
+    // (lin_rec709) and back: it must equal OCIO's BuiltinTransform
+    // ADX16_to_ACES2065-1 applied directly, up to float rounding of the two
+    // matrices (relative 1e-5).
+    for (const char* adx : { "ADX10", "ADX16" }) {
+        std::unique_ptr<Converter> conv;
+        Status s = Converter::create("", adx, "ACES2065-1", conv);
+        ASSERT_TRUE(s.ok()) << s.message();
+        EXPECT_EQ(conv->source_name(), adx);
+        EXPECT_EQ(conv->destination_name(), "ACES2065-1");
+        auto bt = OCIO::BuiltinTransform::Create();
+        bt->setStyle((std::string(adx) + "_to_ACES2065-1").c_str());
+        auto direct = OCIO::Config::CreateRaw()->getProcessor(bt)->getDefaultCPUProcessor();
+        const bool ten = std::string(adx) == "ADX10";
+        for (double d : { 0.0, 0.3, 0.7, 1.2, 1.8 }) {
+            const float cv = static_cast<float>(ten ? (95.0 + 500.0 * d) / 1023.0
+                                                    : (1520.0 + 8000.0 * d) / 65535.0);
+            float a[3] = { cv, cv, cv }, b[3] = { cv, cv, cv };
+            conv->apply_rgb(a, 1);
+            direct->applyRGB(b);
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(a[c], b[c], 1e-5 * std::fabs(b[c]) + 1e-7) << adx << " D " << d;
+        }
+    }
+    std::string resolved;
+    ASSERT_TRUE(filmgrain::ocio::find_colorspace("", "adx16", resolved).ok());
+    EXPECT_EQ(resolved, "ADX16");
+    ASSERT_TRUE(filmgrain::ocio::find_colorspace("", "no such space", resolved).ok());
+    EXPECT_EQ(resolved, "");
+}
+
+TEST_F(OcioTest, DisplayViewDefaultsToSrgbAces)
+{
+    std::unique_ptr<Converter> conv;
+    Status s = Converter::create_display_view("", "ACES2065-1", "", "", conv);
+    ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_EQ(conv->destination_name(), "sRGB / ACES 1.0 - SDR Video");
+    // ACES mid grey (0.18) through the ACES 1.0 SDR video output transform
+    // is about 0.39 on an sRGB display (the RRT's mid grey ~10 nits of 100);
+    // black stays black, brighter is brighter.
+    float px[9] = { 0.18f, 0.18f, 0.18f, 0.0f, 0.0f, 0.0f, 1.0f, 1.0f, 1.0f };
+    conv->apply_rgb(px, 3);
+    EXPECT_NEAR(px[0], 0.39, 0.05);
+    EXPECT_NEAR(px[0], px[1], 1e-3);
+    EXPECT_NEAR(px[3], 0.0, 1e-3);
+    EXPECT_GT(px[6], px[0]);
+    s = Converter::create_display_view("", "ACES2065-1", "sRGB", "Nope", conv);
+    ASSERT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("unknown view 'Nope'"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("ACES 1.0 - SDR Video"), std::string::npos) << s.message();
+    EXPECT_FALSE(conv);
+    s = Converter::create("", "scene_linear", "nowhere", conv);
+    ASSERT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("unknown colour space 'nowhere'"), std::string::npos);
 }

@@ -94,7 +94,8 @@ const std::vector<OptionSpec>& option_table()
               return s;
           } },
         { "--colorconfig", nullptr, "FILE",
-          "OCIO config for the input conversion (default: $OCIO, else the embedded config)",
+          "OCIO config for the input conversion, the regrain output and the preview (default: "
+          "$OCIO, else the embedded config)",
           [](CliArgs& a, const std::string&, const char* v) {
               Status s      = once(!a.colorconfig.empty(), "--colorconfig");
               a.colorconfig = v;
@@ -111,6 +112,17 @@ const std::vector<OptionSpec>& option_table()
               a.iscolorspace     = v;
               if (s && a.iscolorspace.empty())
                   s = Status::error("--iscolorspace: empty colour space name");
+              return s;
+          } },
+        { "--ocolorspace", nullptr, "NAME",
+          "Colour space of the output=regrain positive (default: the config's scene_linear); "
+          "only with output=regrain",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s          = once(a.has_ocolorspace, "--ocolorspace");
+              a.has_ocolorspace = true;
+              a.ocolorspace     = v;
+              if (s && a.ocolorspace.empty())
+                  s = Status::error("--ocolorspace: empty colour space name");
               return s;
           } },
         { "--filmgrain", nullptr, "",
@@ -378,6 +390,10 @@ Status validate_render_args(const CliArgs& a)
     if (!a.has_filmgrain)
         return Status::error("no --filmgrain command given: nothing to do (--filmgrain alone "
                              "renders with the defaults)");
+    if (a.has_ocolorspace && a.filmgrain.output != OutputKind::regrain)
+        return Status::errorf("--ocolorspace ", a.ocolorspace, " applies to output=regrain only "
+                              "(the output is ", output_kind_name(a.filmgrain.output),
+                              ": densities and ADX code values have no colour space to choose)");
     if (a.output.empty())
         return Status::error("no output given: -o FILE.exr is required");
     if (lowercase_extension(a.output) != ".exr")
@@ -411,7 +427,8 @@ std::string help_text()
     out << "filmgrain " << version_string()
         << " -- physically based per-grain film simulation\n\n"
         << "Usage: filmgrain INPUT [--colorconfig FILE] [--iscolorspace NAME]\n"
-        << "                 --filmgrain[:key=value...] [-d half|float] -o OUTPUT.exr\n"
+        << "                 --filmgrain[:key=value...] [--ocolorspace NAME]\n"
+        << "                 [-d half|float] -o OUTPUT.exr\n"
         << "                 [--stats FILE.json] [--preview FILE.png] [--threads N]\n"
         << "                 [--progress] [-q]\n"
         << "       filmgrain PLATE.####.exr --frames LIST --filmgrain[:...] -o NEG.####.exr\n"
@@ -463,7 +480,8 @@ std::string help_text()
     out << "      1. --colorconfig FILE\n"
         << "      2. $OCIO, when set and not empty\n"
         << "      3. the embedded minimal config (scene-linear Rec.709 reference, ACEScg,\n"
-        << "         ACES2065-1, sRGB, raw)\n";
+        << "         ACES2065-1, ADX10, ADX16, sRGB, raw; display sRGB, views\n"
+        << "         ACES 1.0 - SDR Video and Raw)\n";
     append_wrapped(out, "    ",
                    "INPUT's colour space is --iscolorspace NAME; else the file's "
                    "oiio:ColorSpace attribute (e.g. sRGB for PNG and JPEG, Linear for "
@@ -477,41 +495,52 @@ std::string help_text()
                                         + list + ".");
     }
 
-    out << "\nOutput:\n";
+    out << "\nOutput (--filmgrain:output=):\n";
     append_wrapped(out, "    ",
-                   "One channel per stock layer, named after the layer: negative density, "
-                   "-log10(transmittance) + the stock's base density. The full (display) "
-                   "window is the whole scan, the data window the roi. Metadata: "
-                   "filmgrain:quantity, filmgrain:stock (the stock as JSON), "
-                   "filmgrain:stock_name, filmgrain:seed, filmgrain:frame and "
-                   "filmgrain:static (sequences), filmgrain:grain_seed, "
-                   "filmgrain:settings_hash, filmgrain:exposure_stops, "
+                   "density (default): one channel per stock layer, named after the layer: "
+                   "negative density, -log10(transmittance) + the stock's base density. The full "
+                   "(display) window is the whole scan, the data window the roi. Metadata: "
+                   "filmgrain:output, filmgrain:quantity, filmgrain:stock (the stock as JSON), "
+                   "filmgrain:stock_name, filmgrain:seed, filmgrain:exposure_stops, "
                    "filmgrain:shutter_s, filmgrain:frame_width_mm, filmgrain:engine, "
                    "filmgrain:version.");
-    out << "\nSequences:\n";
     append_wrapped(out, "    ",
-                   "--frames LIST renders one image per frame; INPUT (or a still image, read "
-                   "for every frame, or --wedge), -o, --stats and --preview are frame "
-                   "patterns: # is four digits (oiiotool), a run of # or @ one digit each "
-                   "(#### and @@@@: four), %04d as printf. INPUT may carry the list itself "
-                   "(plate.1001-1100#.exr). Frame N's grain is drawn from frame_seed(seed, N) "
-                   "= hash_ids(seed, 0xf4a3e, N) (MurmurHash3's fmix64 chained, "
-                   "core/src/rng.h), exactly as --filmgrain:frame=N renders it alone, so a "
-                   "frame re-rendered alone is bit-identical; :static=1 keeps the seed's "
-                   "pattern on every frame. Each output records filmgrain:frame, "
-                   "filmgrain:grain_seed and filmgrain:settings_hash (SHA-1 of every setting "
-                   "that decides the pixels, and of the input file's path, size and time); "
-                   "--skip-existing skips frames whose outputs carry the same hash. A stopped "
-                   "sequence leaves the frames before it complete and nothing of the frame "
-                   "it stopped in: outputs are created unnamed and linked into place only "
-                   "when complete, so even SIGKILL leaves no partial file.");
+                   "adx10, adx16: Academy Density Exchange (SMPTE ST 2065-3), channels R, G, B: "
+                   "code value = 95 + 500 D (adx10) or 1520 + 8000 D (adx16), rounded, clamped "
+                   "to [0, 1023] or [0, 65535] (clamped values are counted in a warning) and "
+                   "stored divided by 1023 or 65535, as OCIO's ADX10 / ADX16 colour spaces (ACES "
+                   "configs, and the embedded one) read them to bring the scan to ACES2065-1. D "
+                   "is the density above D-min: the layer's density minus its expected density "
+                   "at zero exposure (base + fog, from the model). R, G, B are the layers named "
+                   "R, G and B (the colour-negative preset's red-, green- and blue-sensitive "
+                   "layers: the dye a red-sensitive layer forms absorbs red, so its density "
+                   "stands for the red printing density; filmgrain's layers are silver, so this "
+                   "is an approximation). A one-layer stock gives R = G = B (silver is neutral); "
+                   "other stocks are refused. filmgrain:colorspace (and oiio:ColorSpace in "
+                   "memory) is ADX10 or ADX16.");
+    append_wrapped(out, "    ",
+                   "regrain: a scene-linear positive whose local mean is the input and whose "
+                   "fluctuation is the film's grain, for comp to add to a clean element. Each "
+                   "layer's density is mapped back through the inverse of the layer's expected "
+                   "characteristic curve (the model's own mean curve at this shutter and "
+                   "exposure), linearised at the input's expected transmittance, which keeps "
+                   "the mean exactly (the plain inverse is biased by the grain: Jensen); the "
+                   "layer exposures go back to RGB through the inverse of the stock's 3x3 "
+                   "sensitivity matrix (a one-layer stock gives grey), then from scene_linear "
+                   "to --ocolorspace. Needs the scan at the input's size (no scan=) and a one- "
+                   "or three-layer stock whose populations have rate_area_exponent 0. Where the "
+                   "curve flattens (toe, shoulder) the grain is limited to what a local gamma "
+                   "of a tenth of the curve's steepest gives. Channels R, G, B; "
+                   "filmgrain:colorspace names the colour space.");
     out << "\nPreview:\n";
     append_wrapped(out, "    ",
-                   "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the "
-                   "99.9th percentile of the density over all layers (one scale for all "
-                   "channels: no colour shift), encoded as p^(1/2.2) in 8 bits. Layers named "
-                   "R, G and B give an RGB PNG; a single layer (or two) gives grey from the "
-                   "first layer; otherwise the first three layers in stock order are R, G, B.");
+                   "The negative as a positive through OCIO: density above D-min -> ADX10 (as "
+                   "output=adx10) -> the config's ADX10 colour space -> the config's default "
+                   "display and its default view (embedded config: sRGB, ACES 1.0 - SDR Video), "
+                   "8-bit PNG. Without an ADX10 colour space in the config, or for a stock whose "
+                   "layers are not R, G, B (nor one layer), a plain inversion, with a warning: "
+                   "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the 99.9th "
+                   "percentile of the density over all layers, encoded as p^(1/2.2).");
     out << "\nProgress and messages go to stderr; errors read 'filmgrain: error: ...'.\n"
         << "On any error or interruption no output file (-o, --stats, --preview) of the\n"
         << "image being rendered is created. Progress shows on a terminal once a run takes\n"

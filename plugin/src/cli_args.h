@@ -20,6 +20,8 @@ struct CliArgs {
     std::string colorconfig;  ///< --colorconfig FILE (empty: $OCIO, else embedded)
     std::string iscolorspace;  ///< --iscolorspace NAME
     bool has_iscolorspace = false;
+    std::string ocolorspace;  ///< --ocolorspace NAME (output=regrain only)
+    bool has_ocolorspace = false;
 
     bool has_filmgrain = false;  ///< --filmgrain given
     FilmgrainCommand filmgrain;

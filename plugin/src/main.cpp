@@ -39,6 +39,7 @@
 #include "filmgrain/version.h"
 #include "filmgrain/wedge.h"
 #include "output_files.h"
+#include "output_transform.h"
 #include "preview.h"
 #include "sequence.h"
 #include "stats_json.h"
@@ -571,15 +572,22 @@ Status write_image(OutputFiles& files, const std::string& final_path, OIIO::Imag
     return {};
 }
 
-Status write_preview(OutputFiles& files, const OIIO::ImageBuf& density, const Stock& stock,
-                     const std::string& final_path)
+/// The positive preview of the negative `density`: through ADX and the
+/// OCIO config's display view (make_film_preview), or the plain inversion
+/// with a warning where the config cannot.
+Status write_preview(OutputFiles& files, const OIIO::ImageBuf& density,
+                     const FilmgrainOptions& opts, const std::string& colorconfig,
+                     const Console& con, const std::string& final_path)
 {
-    std::vector<std::string> names;
-    for (const Layer& l : stock.layers)
-        names.push_back(l.name);
     const OIIO::ImageSpec& ds = density.spec();
-    const Preview p = make_preview(static_cast<const float*>(density.localpixels()), ds.width,
-                                   ds.height, names, stock.base_density);
+    Preview p;
+    std::string warning;
+    if (Status s = make_film_preview(static_cast<const float*>(density.localpixels()), ds.width,
+                                     ds.height, opts.stock, opts.scene, colorconfig, p, warning);
+        !s)
+        return Status::errorf("preview: ", s.message());
+    if (!warning.empty())
+        con.warning(warning);
     OIIO::ImageSpec spec(ds.width, ds.height, p.channels, OIIO::TypeUInt8);
     if (p.channels == 1)
         spec.channelnames = { "Y" };
@@ -640,6 +648,8 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
     j["scan"]     = { opts.scan_width, opts.scan_height };
     j["roi"]      = cmd.has_roi ? Json { cmd.roi_x, cmd.roi_y, cmd.roi_width, cmd.roi_height }
                                 : Json(nullptr);
+    j["output"]   = { { "kind", output_kind_name(cmd.output) },
+                      { "ocolorspace", a.has_ocolorspace ? a.ocolorspace : "" } };
     j["type"]     = a.output_type == OutputType::half16 ? "half" : "float";
     j["compression"] = a.output_modifiers.compression;
     const char* ocio_env = std::getenv("OCIO");
@@ -803,16 +813,30 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
                     + " input pixels read have a negative channel: it enters each layer's "
                       "weighted sum as is, and a negative layer exposure counts as none");
 
+    // What the EXR holds: the density, or ADX code values or the regrain
+    // positive made from it (--filmgrain:output=).
+    // The density itself is written in place (no copy of the frame).
+    report.output = output_kind_name(cmd.output);
+    OIIO::ImageBuf transformed;
+    OIIO::ImageBuf& result = cmd.output == OutputKind::density ? dst : transformed;
+    OutputReport output_report;
+    if (Status s = apply_output(OutputRequest { cmd.output, a.colorconfig, a.ocolorspace }, opts,
+                                src, dst, result, output_report);
+        !s)
+        return s;
+    for (const std::string& w : output_report.warnings)
+        con.warning(w);
+
     // Write, all or nothing.
     t = Clock::now();
-    dst.specmod().attribute("compression", a.output_modifiers.compression);
-    dst.specmod().attribute("filmgrain:settings_hash", hash);
+    result.specmod().attribute("compression", a.output_modifiers.compression);
+    result.specmod().attribute("filmgrain:settings_hash", hash);
     const OIIO::TypeDesc type
         = a.output_type == OutputType::half16 ? OIIO::TypeHalf : OIIO::TypeFloat;
-    if (Status s = write_image(files, job.output, dst, type, "openexr"); !s)
+    if (Status s = write_image(files, job.output, result, type, "openexr"); !s)
         return s;
     if (!job.preview.empty())
-        if (Status s = write_preview(files, dst, opts.stock, job.preview); !s)
+        if (Status s = write_preview(files, dst, opts, a.colorconfig, con, job.preview); !s)
             return s;
     report.seconds.write = seconds_since(t);
     report.seconds.total = seconds_since(t_start);

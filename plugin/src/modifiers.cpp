@@ -367,6 +367,15 @@ bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return true;
 }
 
+bool parse_output_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (!parse_output_kind(v, cmd.output)) {
+        why = "unknown output (known: density, adx10, adx16, regrain)";
+        return false;
+    }
+    return true;
+}
+
 std::string engine_choice(const char* what) { return std::string("the engine's choice (") + what + ")"; }
 
 /// RenderSettings::tile_size_px's documented range.
@@ -490,6 +499,13 @@ const Modifier kModifiers[] = {
       parse_samples },
     { "tile", "N", "work tile side in scan pixels, [1, 4096]; speed only, never the output",
       [](const FilmgrainCommand& d) { return std::to_string(d.tile_size_px); }, parse_tile },
+    { "output", "density|adx10|adx16|regrain",
+      "what the EXR holds: density = negative density per layer; adx10 / adx16 = Academy "
+      "Density Exchange code values (SMPTE ST 2065-3) / 1023 or / 65535, channels R, G, B, for "
+      "an OCIO config's ADX10 / ADX16 colour space; regrain = a scene-linear positive, the input "
+      "plus the film's grain, in --ocolorspace (see Output below)",
+      [](const FilmgrainCommand& d) { return std::string(output_kind_name(d.output)); },
+      parse_output_value },
 };
 
 std::string modifier_list()

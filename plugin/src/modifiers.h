@@ -15,6 +15,7 @@
 #include "filmgrain/render.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
+#include "output_kind.h"
 
 namespace filmgrain::cli {
 
@@ -44,6 +45,9 @@ struct FilmgrainCommand {
     int64_t roi_height = 0;
     /// `tile=N`: work tile side, scan pixels (speed only).
     int tile_size_px = RenderSettings().tile_size_px;
+    /// `output=density|adx10|adx16|regrain`: what the EXR holds
+    /// (output_transform.h).
+    OutputKind output = OutputKind::density;
 };
 
 /// One modifier as documented by --help: its key, the form of its value,

@@ -168,7 +168,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
                            "static",   "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
                            "photons",  "coverage", "grains",  "scale",    "samples",
-                           "tile" };
+                           "tile",     "output" };
     ASSERT_EQ(docs.size(), std::size(keys));
     for (size_t i = 0; i < docs.size(); ++i) {
         EXPECT_EQ(docs[i].key, keys[i]);
@@ -244,6 +244,30 @@ TEST(Modifiers, RandomInputsNeverCrash)
             (void)parse_output_modifiers(s, out);
         });
     }
+}
+
+}  // namespace
+}  // namespace filmgrain::cli
+
+namespace filmgrain::cli {
+namespace {
+
+TEST(Modifiers, OutputKind)
+{
+    EXPECT_EQ(FilmgrainCommand().output, OutputKind::density);
+    EXPECT_EQ(parse_ok("--filmgrain:output=density").output, OutputKind::density);
+    EXPECT_EQ(parse_ok("--filmgrain:output=adx10").output, OutputKind::adx10);
+    EXPECT_EQ(parse_ok("--filmgrain:output=adx16").output, OutputKind::adx16);
+    EXPECT_EQ(parse_ok("--filmgrain:output=regrain:seed=3").output, OutputKind::regrain);
+    const std::string e = parse_error("--filmgrain:output=ADX16");
+    EXPECT_NE(e.find("output=ADX16: unknown output (known: density, adx10, adx16, regrain)"),
+              std::string::npos)
+        << e;
+    bool documented = false;
+    for (const ModifierDoc& d : filmgrain_modifier_docs())
+        documented |= d.key == "output" && d.default_text == "density"
+                      && d.form == "density|adx10|adx16|regrain";
+    EXPECT_TRUE(documented);
 }
 
 }  // namespace

@@ -2,7 +2,13 @@
 #include "preview.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <memory>
+
+#include "filmgrain/expected_curve.h"
+#include "filmgrain/ocio.h"
+#include "output_transform.h"
 
 namespace filmgrain::cli {
 
@@ -62,6 +68,56 @@ Preview make_preview(const float* density, int64_t width, int64_t height,
                 = static_cast<uint8_t>(std::lround(255.0 * std::pow(p, 1.0 / kPreviewGamma)));
         }
     return out;
+}
+
+Status make_film_preview(const float* density, int64_t width, int64_t height,
+                         const Stock& stock, const SceneSettings& scene,
+                         const std::string& colorconfig, Preview& out, std::string& warning)
+{
+    warning.clear();
+    std::vector<std::string> names;
+    for (const Layer& l : stock.layers)
+        names.push_back(l.name);
+    const auto fallback = [&](const std::string& why) {
+        warning = "preview: " + why + "; the preview is a plain inversion of the density";
+        out     = make_preview(density, width, height, names, stock.base_density);
+        return Status();
+    };
+    std::array<int, 3> layers {};
+    if (Status s = adx_layers(names, layers); !s)
+        return fallback(s.message());
+    std::string adx;
+    if (Status s = ocio::find_colorspace(colorconfig, "ADX10", adx); !s)
+        return s;
+    if (adx.empty())
+        return fallback("the OCIO config has no ADX10 colour space");
+    std::unique_ptr<ocio::Converter> conv;
+    if (Status s = ocio::Converter::create_display_view(colorconfig, adx, "", "", conv); !s)
+        return Status::errorf("preview: ", s.message());
+    ExpectedCurveOptions o;
+    o.fog_only = true;
+    std::vector<ExpectedCurve> curves;
+    if (Status s = expected_curves(stock, scene, o, curves); !s)
+        return Status::errorf("preview: ", s.message());
+    std::vector<double> d_min;
+    for (const ExpectedCurve& c : curves)
+        d_min.push_back(c.min_density());
+
+    const size_t npix = static_cast<size_t>(width) * static_cast<size_t>(height);
+    std::vector<float> rgb(npix * 3);
+    encode_adx(density, npix, static_cast<int>(names.size()), layers, d_min,
+               adx_encoding(OutputKind::adx10), rgb.data());
+    conv->apply_rgb(rgb.data(), npix);
+    out          = Preview();
+    out.width    = width;
+    out.height   = height;
+    out.channels = 3;
+    out.pixels.resize(npix * 3);
+    for (size_t i = 0; i < npix * 3; ++i) {
+        const float v = std::isfinite(rgb[i]) ? std::clamp(rgb[i], 0.0f, 1.0f) : 0.0f;
+        out.pixels[i] = static_cast<uint8_t>(std::lround(255.0 * v));
+    }
+    return {};
 }
 
 }  // namespace filmgrain::cli

@@ -1,10 +1,14 @@
 // filmgrain CLI: the 8-bit preview positive of a density image (--preview).
-// Plain buffers in and out; no OIIO.
+// Plain buffers in and out; no OIIO (OCIO through filmgrain/ocio.h).
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "filmgrain/render.h"
+#include "filmgrain/status.h"
+#include "filmgrain/stock.h"
 
 namespace filmgrain::cli {
 
@@ -37,5 +41,20 @@ struct Preview {
 /// pixels of layer_names.size() interleaved floats.
 Preview make_preview(const float* density, int64_t width, int64_t height,
                      const std::vector<std::string>& layer_names, double base_density);
+
+/// The preview through OCIO (--help "Preview"): each layer's density above
+/// its D-min (expected_curves, fog_only: base + fog) as ADX10 code values
+/// (encode_adx, channels R, G, B, or the one layer three times) -> the
+/// config's ADX10 colour space -> the config's default display and view
+/// (embedded: sRGB, ACES 1.0 - SDR Video) -> round(255 clamp(x, 0, 1)).
+/// colorconfig: --colorconfig (empty: $OCIO, else the embedded config).
+/// Falls back to make_preview (a plain inversion) and says why in
+/// `warning` when the config has no ADX10 colour space or the stock's
+/// layers are not R, G, B (nor one layer); otherwise `warning` is empty.
+/// Errors: the config cannot be loaded, a display transform fails.
+/// `density` holds width x height pixels of stock.layers.size() floats.
+Status make_film_preview(const float* density, int64_t width, int64_t height,
+                         const Stock& stock, const SceneSettings& scene,
+                         const std::string& colorconfig, Preview& out, std::string& warning);
 
 }  // namespace filmgrain::cli

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "filmgrain/expected_curve.h"
+
 namespace filmgrain::cli {
 namespace {
 
@@ -55,6 +57,40 @@ TEST(Preview, UnexposedFilmIsBlack)
     EXPECT_EQ(p.channels, 1);
     for (uint8_t v : p.pixels)
         EXPECT_EQ(v, 0);
+}
+
+TEST(Preview, ThroughOcioAdxAndTheAcesView)
+{
+    // The colour negative: D-min (base + fog, the model's) previews black,
+    // D-min + 0.69 (ADX's mid grey: ACES 0.18) a neutral grey near the ACES
+    // SDR view's 0.39 (~100 of 255), denser is brighter; R = G = B for a
+    // neutral density.
+    Stock stock;
+    ASSERT_TRUE(load_stock("color-negative", stock));
+    std::vector<ExpectedCurve> fog;
+    ExpectedCurveOptions o;
+    o.fog_only = true;
+    ASSERT_TRUE(expected_curves(stock, SceneSettings(), o, fog));
+    const float dmin = static_cast<float>(fog[0].min_density());
+    const float d[]  = { dmin, dmin, dmin, dmin + 0.69f, dmin + 0.69f, dmin + 0.69f,
+                         dmin + 1.2f, dmin + 1.2f, dmin + 1.2f };
+    Preview p;
+    std::string warning;
+    const Status s = make_film_preview(d, 3, 1, stock, SceneSettings(), "", p, warning);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(warning, "");
+    ASSERT_EQ(p.channels, 3);
+    EXPECT_LE(p.pixels[0], 2);
+    EXPECT_NEAR(p.pixels[3], 100, 15);
+    EXPECT_EQ(p.pixels[3], p.pixels[4]);
+    EXPECT_EQ(p.pixels[3], p.pixels[5]);
+    EXPECT_GT(p.pixels[6], p.pixels[3]);
+
+    // Layers that are not R, G, B: the plain inversion, with a warning.
+    stock.layers[0].name = "X";
+    ASSERT_TRUE(make_film_preview(d, 3, 1, stock, SceneSettings(), "", p, warning));
+    EXPECT_NE(warning.find("plain inversion"), std::string::npos) << warning;
+    EXPECT_EQ(p.pixels, make_preview(d, 3, 1, { "X", "G", "B" }, stock.base_density).pixels);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@ std::string stats_json(const RunReport& r)
     Json j;
     j["engine"]         = r.render.engine;
     j["version"]        = version_string();
+    j["output"]         = r.output;
     j["stock"]          = r.stock_name;
     j["seed"]           = r.scene.seed;
     j["frame"]          = r.scene.frame ? Json(*r.scene.frame) : Json(nullptr);

@@ -1,7 +1,8 @@
 // filmgrain CLI: the --stats JSON document.
 //
 // Its key names are a contract for scripts (tests/cli checks them):
-//   engine, version, stock, seed, frame (null for a single image), static,
+//   engine, version, output (density|adx10|adx16|regrain), stock, seed,
+//   frame (null for a single image), static,
 //   grain_seed, exposure_stops, shutter_s, frame_width_mm,
 //   seconds {read, color, simulate, write, total},
 //   scan {width, height, pitch_x_um, pitch_y_um},
@@ -35,6 +36,8 @@ struct RunReport {
     Roi roi;
     std::string input_file;  ///< path, or "wedge"
     std::string input_colorspace;
+    /// --filmgrain:output= (output_kind_name).
+    std::string output = "density";
     RenderStats render;
     StageSeconds seconds;
 };

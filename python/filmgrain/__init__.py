@@ -208,6 +208,7 @@ def render(
     engine=None,
     tolerance=None,
     tile=None,
+    output=None,
     threads=0,
     progress=None,
     **expert,
@@ -252,6 +253,15 @@ def render(
         engine: "auto", "exact" or "fast".
         tolerance: density error budget of the approximate paths, (0, 1].
         tile: work tile side, scan pixels, [1, 4096] (speed only).
+        output: what the returned array holds, as the CLI's ``output=``:
+            "density" (the default: negative density per layer), "adx10" /
+            "adx16" (Academy Density Exchange code values / 1023 or /
+            65535, R, G, B), or "regrain" (a scene-linear positive in the
+            config's scene_linear whose local mean is the input and whose
+            fluctuation is the film's grain; needs the scan at the input's
+            size). The colour config is $OCIO, else the embedded one. The
+            transforms' warnings (e.g. clamped ADX code values) are Python
+            UserWarnings.
         threads: worker threads, int in [0, 4096]; 0: OpenImageIO's
             default (all hardware threads unless changed). Never changes
             the output.
@@ -271,7 +281,9 @@ def render(
     Returns:
         A :class:`Negative`, which unpacks as ``density, stats``: density is
         a float32 array (roi height, roi width, layers), layer names in
-        ``.channels``; stats is the CLI's --stats document as a dict.
+        ``.channels`` (with ``output=`` other than density: that output's
+        values, channels R, G, B); stats is the CLI's --stats document as a
+        dict.
 
     Raises:
         filmgrain.Error (a ValueError): any setting, stock or region the
@@ -292,6 +304,7 @@ def render(
         engine=engine,
         tolerance=tolerance,
         tile=tile,
+        output=output,
     )
     modifiers.update(expert)
     return _render(pixels, stock, modifiers, threads, progress, None)

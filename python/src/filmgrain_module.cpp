@@ -35,6 +35,7 @@
 #include "filmgrain/stock.h"
 #include "filmgrain/version.h"
 #include "modifiers.h"
+#include "output_transform.h"
 #include "stats_json.h"
 
 namespace py = pybind11;
@@ -217,6 +218,28 @@ py::tuple render(py::array pixels, const std::string& modifiers,
     interruption.rethrow();  // Ctrl-C or the progress callable's exception
     if (!ok)
         throw Error(operator_message(dst));
+
+    // output=: the CLI's transform of the density (ADX code values, the
+    // regrain positive in the config's scene_linear), as the CLI applies it.
+    report.output = cli::output_kind_name(cmd.output);
+    {
+        OIIO::ImageBuf transformed;  // the density itself stays in place
+        OIIO::ImageBuf& result = cmd.output == cli::OutputKind::density ? dst : transformed;
+        cli::OutputReport output_report;
+        Status s;
+        {
+            py::gil_scoped_release nogil;
+            s = cli::apply_output(cli::OutputRequest { cmd.output, "", "" }, opts, src, dst,
+                                  result, output_report);
+        }
+        if (!s)
+            throw Error(s.message());
+        for (const std::string& w : output_report.warnings)
+            if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0)
+                throw py::error_already_set();  // warnings turned into errors
+        if (&result != &dst)
+            dst = std::move(result);
+    }
 
     RenderSettings geometry;
     geometry.scan_width  = opts.scan_width;

@@ -35,6 +35,14 @@ CASES = {
         {"seed": 5, "width_mm": FAST_WIDTH_MM, "tolerance": 0.01, "kinetics": "table",
          "samples": 8},
     ),
+    "output-adx16": (
+        {"seed": 8, "width_mm": FAST_WIDTH_MM, "output": "adx16"},
+        {"seed": 8, "width_mm": FAST_WIDTH_MM, "output": "adx16"},
+    ),
+    "output-regrain": (
+        {"stock": "paper", "seed": 8, "width_mm": FAST_WIDTH_MM, "output": "regrain"},
+        {"stock": "paper", "seed": 8, "width_mm": FAST_WIDTH_MM, "output": "regrain"},
+    ),
 }
 
 

@@ -7,9 +7,9 @@ from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
 MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "width_mm", "scan", "roi",
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
-             "tile"]
+             "tile", "output"]
 
-OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--filmgrain", "-d", "-o",
+OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--ocolorspace", "--filmgrain", "-d", "-o",
            "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
            "--list-stocks", "--print-stock", "--version", "--help"]
 

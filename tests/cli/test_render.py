@@ -112,7 +112,12 @@ def test_one_layer_stock_and_grey_preview(run, tmp_path, ramp_exr):
     r = run(ramp_exr, f"--filmgrain:stock=paper:{FAST}", "-o", out, "--preview", preview)
     assert r.returncode == 0, r.stderr
     assert Exr(out).names == ["Y"]
-    assert oiio.ImageBuf(str(preview)).spec().nchannels == 1
+    # The preview goes negative -> ADX (R = G = B for one layer) -> ACES ->
+    # the config's sRGB view: neutral grey in an RGB PNG.
+    png = oiio.ImageBuf(str(preview))
+    assert png.spec().nchannels == 3
+    p = png.get_pixels(oiio.UINT8).astype(int)
+    assert np.abs(p[:, :, 0] - p[:, :, 1]).max() <= 1 and np.abs(p[:, :, 2] - p[:, :, 1]).max() <= 1
 
 
 def test_scan_and_roi(run, tmp_path, ramp_exr):

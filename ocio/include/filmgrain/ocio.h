@@ -1,6 +1,8 @@
 // filmgrain: per-grain film simulation.
-// OpenColorIO input conversion: pixels in any colour space a config knows ->
-// the config's scene_linear role, which is what the simulator consumes.
+// OpenColorIO conversions: pixels in any colour space a config knows -> the
+// config's scene_linear role, which is what the simulator consumes
+// (InputConverter); between any two colour spaces, or from a colour space to
+// a display and view, for the outputs and the preview (Converter).
 //
 // No OpenColorIO type appears here (pimpl): including this header needs only
 // the C++ standard library and filmgrain/status.h. No exception leaves these
@@ -11,7 +13,9 @@
 //   1. config_path not empty: that file (like oiiotool --colorconfig);
 //   2. else $OCIO, when set and not empty;
 //   3. else the embedded minimal config (embedded_config_text()): reference
-//      lin_rec709 (scene-linear Rec.709, D65), ACEScg, ACES2065-1, sRGB, raw.
+//      lin_rec709 (scene-linear Rec.709, D65), ACEScg, ACES2065-1, ADX10,
+//      ADX16, sRGB, raw; display sRGB with views "ACES 1.0 - SDR Video" (the
+//      default) and Raw.
 #pragma once
 
 #include <filmgrain/status.h>
@@ -103,6 +107,55 @@ private:
     explicit InputConverter(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> m_impl;
 };
+
+/// Converts pixels from one colour space to another colour space, or to a
+/// display and view, of one config. Built once (create*), applied per tile;
+/// same threading, determinism and NaN/Inf behaviour as InputConverter.
+/// Not copyable.
+class Converter {
+public:
+    /// src -> dst, both any colour space name, alias or role the config
+    /// knows (e.g. "ADX16" -> "scene_linear", "scene_linear" -> "ACEScg").
+    /// Errors name the unknown colour space and the config, and list the
+    /// known names. out: set on success, reset on failure.
+    static Status create(const std::string& config_path, const std::string& src_colorspace,
+                         const std::string& dst_colorspace, std::unique_ptr<Converter>& out);
+
+    /// src -> (display, view): the view's transform then the display's
+    /// encoding, as an image viewer shows src. Empty display: the config's
+    /// default display; empty view: that display's default view. Errors
+    /// name the display or view and list the known ones.
+    static Status create_display_view(const std::string& config_path,
+                                      const std::string& src_colorspace,
+                                      const std::string& display, const std::string& view,
+                                      std::unique_ptr<Converter>& out);
+
+    ~Converter();
+    Converter(const Converter&)            = delete;
+    Converter& operator=(const Converter&) = delete;
+
+    /// As InputConverter::apply_rgb / apply_rgb_strided.
+    void apply_rgb(float* rgb, size_t npixels) const;
+    void apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const;
+    bool is_noop() const;
+    const ConfigInfo& config() const;
+    /// The resolved names: the source colour space, and the destination
+    /// colour space or "display / view".
+    const std::string& source_name() const;
+    const std::string& destination_name() const;
+
+private:
+    struct Impl;
+    explicit Converter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// Resolves `name` (a colour space, alias or role, case-insensitive) in the
+/// config that config_path selects: `resolved` receives the colour space's
+/// own name, or is cleared when the config does not know it (still a
+/// success). Errors only when the config cannot be loaded.
+Status find_colorspace(const std::string& config_path, const std::string& name,
+                       std::string& resolved, ConfigInfo* info = nullptr);
 
 /// The embedded minimal config (OCIO v2 YAML), exactly as in
 /// ocio/src/filmgrain_minimal.ocio at build time; for --help, debugging and

@@ -1,0 +1,396 @@
+// filmgrain CLI: the output transforms (output_transform.h).
+#include "output_transform.h"
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <sstream>
+
+#include "filmgrain/ocio.h"
+
+namespace filmgrain::cli {
+
+// --- ADX -------------------------------------------------------------------
+
+AdxEncoding adx_encoding(OutputKind kind)
+{
+    if (kind == OutputKind::adx10)
+        return { "ADX10", 95.0, 500.0, 1023.0 };
+    return { "ADX16", 1520.0, 8000.0, 65535.0 };
+}
+
+namespace {
+
+std::string join_names(const std::vector<std::string>& names)
+{
+    std::string s;
+    for (const std::string& n : names)
+        s += (s.empty() ? "" : ", ") + n;
+    return s;
+}
+
+}  // namespace
+
+Status adx_layers(const std::vector<std::string>& names, std::array<int, 3>& out)
+{
+    if (names.size() == 1) {
+        out = { 0, 0, 0 };
+        return {};
+    }
+    const char* rgb[3] = { "R", "G", "B" };
+    for (int c = 0; c < 3; ++c) {
+        const auto it = std::find(names.begin(), names.end(), rgb[c]);
+        if (it == names.end())
+            return Status::errorf("ADX needs the layers named R, G and B (the red-, green- and "
+                                  "blue-sensitive layers, whose densities stand for the "
+                                  "printing densities) or a single layer; the stock's layers "
+                                  "are ", join_names(names), " (no layer ", rgb[c], ")");
+        out[static_cast<size_t>(c)] = static_cast<int>(it - names.begin());
+    }
+    return {};
+}
+
+uint64_t encode_adx(const float* density, size_t npixels, int nlayers,
+                    const std::array<int, 3>& layers, const std::vector<double>& d_min,
+                    const AdxEncoding& enc, float* rgb)
+{
+    uint64_t clamped = 0;
+    for (size_t i = 0; i < npixels; ++i)
+        for (size_t c = 0; c < 3; ++c) {
+            const int l    = layers[c];
+            const double d = density[i * static_cast<size_t>(nlayers) + static_cast<size_t>(l)];
+            double code    = std::round(enc.offset + enc.scale * (d - d_min[static_cast<size_t>(l)]));
+            if (!std::isfinite(code) || code < 0.0 || code > enc.max_code) {
+                ++clamped;
+                code = std::isfinite(code) ? std::clamp(code, 0.0, enc.max_code) : 0.0;
+            }
+            rgb[i * 3 + c] = static_cast<float>(code / enc.max_code);
+        }
+    return clamped;
+}
+
+// --- Regrain ---------------------------------------------------------------
+
+double layer_value(const std::array<double, 3>& s, const float* rgb)
+{
+    if (!std::isfinite(rgb[0]) || !std::isfinite(rgb[1]) || !std::isfinite(rgb[2]))
+        return 0.0;
+    const double v = s[0] * rgb[0] + s[1] * rgb[1] + s[2] * rgb[2];
+    return v > 0.0 ? v : 0.0;
+}
+
+Status make_regrain_model(const Stock& stock, std::vector<ExpectedCurve> curves,
+                          RegrainModel& out)
+{
+    const size_t nl = stock.layers.size();
+    if (nl != 1 && nl != 3)
+        return Status::errorf("output=regrain maps layer exposures back to RGB, which needs a "
+                              "one- or three-layer stock; '", stock.name, "' has ", nl,
+                              " layers");
+    if (curves.size() != nl)
+        return Status::errorf("internal: ", curves.size(), " expected curves for ", nl,
+                              " layers");
+    RegrainModel m;
+    for (size_t l = 0; l < nl; ++l) {
+        m.sensitivity.push_back(stock.layers[l].sensitivity);
+        // The steepest gamma, between points (where the slope is defined).
+        double g_max = 0.0;
+        const ExpectedCurve& c = curves[l];
+        for (size_t i = 1; i + 1 < c.points.size(); ++i)
+            g_max = std::max(g_max, c.gamma_at(std::sqrt(c.points[i].value * c.points[i + 1].value)));
+        if (!(g_max > 0.0))
+            return Status::errorf("output=regrain: layer '", stock.layers[l].name,
+                                  "' has a flat expected curve (no gamma): its density says "
+                                  "nothing about its exposure");
+        m.min_gamma.push_back(kRegrainMinGammaFraction * g_max);
+    }
+    if (nl == 1) {
+        const auto& s   = m.sensitivity[0];
+        const double sum = s[0] + s[1] + s[2];
+        for (auto& row : m.to_rgb)
+            row = { 1.0 / sum, 0.0, 0.0 };
+    } else {
+        // M^-1 by cofactors: rows of M are the layers' sensitivities.
+        const auto& a = m.sensitivity;
+        const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+                           - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+                           + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        double norm = 0.0;
+        for (const auto& row : a)
+            for (double v : row)
+                norm = std::max(norm, std::fabs(v));
+        if (!(std::fabs(det) > 1e-9 * norm * norm * norm))
+            return Status::errorf("output=regrain: the layers' sensitivity matrix of '",
+                                  stock.name, "' is singular (determinant ", det,
+                                  "): layer exposures do not determine RGB");
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                // inverse[i][j] = cofactor[j][i] / det
+                const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
+                m.to_rgb[static_cast<size_t>(i)][static_cast<size_t>(j)]
+                    = (a[r0][c0] * a[r1][c1] - a[r0][c1] * a[r1][c0]) / det;
+            }
+    }
+    m.curves = std::move(curves);
+    out      = std::move(m);
+    return {};
+}
+
+void regrain_pixel(const RegrainModel& m, const float* rgb_in, const float* density,
+                   float* rgb_out)
+{
+    const float in[3] = { rgb_in[0], rgb_in[1], rgb_in[2] };
+    std::copy_n(in, 3, rgb_out);
+    if (!std::isfinite(in[0]) || !std::isfinite(in[1]) || !std::isfinite(in[2]))
+        return;
+    const size_t nl = m.curves.size();
+    double dv[3]    = { 0.0, 0.0, 0.0 };
+    for (size_t l = 0; l < nl; ++l) {
+        if (!std::isfinite(density[l]))
+            return;
+        const ExpectedCurve& c = m.curves[l];
+        const double v         = layer_value(m.sensitivity[l], in);
+        if (!(v > 0.0))
+            continue;  // no light: no grain to map (the fog's is not exposure)
+        const double t_mean = c.transmittance_at(v);
+        const double t      = std::pow(10.0, -(static_cast<double>(density[l]) - c.base_density));
+        const double gamma  = std::max(c.gamma_at(v), m.min_gamma[l]);
+        // dv = -(T - E[T]) / (dE[T]/dv), dE[T]/dv = -E[T] gamma / v.
+        dv[l] = v / (t_mean * gamma) * (t_mean - t);
+    }
+    for (int c = 0; c < 3; ++c) {
+        double d = 0.0;
+        for (size_t l = 0; l < nl; ++l)
+            d += m.to_rgb[static_cast<size_t>(c)][l] * dv[l];
+        rgb_out[c] = static_cast<float>(in[c] + d);
+    }
+}
+
+// --- The CLI's adapter -----------------------------------------------------
+
+namespace {
+
+std::string trim(std::string s)
+{
+    while (!s.empty() && (s.back() == '\n' || s.back() == ' '))
+        s.pop_back();
+    return s;
+}
+
+std::string format_g(double v)
+{
+    std::ostringstream o;
+    o.precision(6);
+    o << v;
+    return o.str();
+}
+
+/// The density image as a local packed float buffer (a copy when it is not
+/// one already).
+Status local_density(const OIIO::ImageBuf& density, int nlayers, OIIO::ImageBuf& local,
+                     const float*& pixels)
+{
+    if (!density.initialized() || density.spec().nchannels != nlayers)
+        return Status::errorf("internal: the density image has ",
+                              density.initialized() ? density.spec().nchannels : 0,
+                              " channels for a stock of ", nlayers, " layers");
+    pixels = static_cast<const float*>(density.localpixels());
+    if (pixels && density.spec().format == OIIO::TypeFloat)
+        return {};
+    if (!local.copy(density, OIIO::TypeFloat))
+        return Status::errorf("cannot read the density image: ", trim(local.geterror()));
+    pixels = static_cast<const float*>(local.localpixels());
+    return {};
+}
+
+/// The output image: density's windows and metadata, 3 float channels R, G, B.
+OIIO::ImageBuf rgb_like(const OIIO::ImageBuf& density)
+{
+    OIIO::ImageSpec spec = density.spec();
+    spec.nchannels       = 3;
+    spec.set_format(OIIO::TypeFloat);
+    spec.channelnames = { "R", "G", "B" };
+    spec.alpha_channel = -1;
+    spec.z_channel     = -1;
+    return OIIO::ImageBuf(spec);
+}
+
+Status apply_adx(const OutputRequest& req, const FilmgrainOptions& opts,
+                 const OIIO::ImageBuf& density, OIIO::ImageBuf& result, OutputReport& report)
+{
+    const Stock& stock = opts.stock;
+    std::vector<std::string> names;
+    for (const Layer& l : stock.layers)
+        names.push_back(l.name);
+    std::array<int, 3> layers {};
+    if (Status s = adx_layers(names, layers); !s)
+        return Status::errorf("output=", output_kind_name(req.kind), ": ", s.message());
+    // D-min: each layer's expected density at zero exposure (base + fog).
+    ExpectedCurveOptions o;
+    o.fog_only = true;
+    std::vector<ExpectedCurve> curves;
+    if (Status s = expected_curves(stock, opts.scene, o, curves); !s)
+        return s;
+    report.d_min.clear();
+    for (const ExpectedCurve& c : curves)
+        report.d_min.push_back(c.min_density());
+    const AdxEncoding enc = adx_encoding(req.kind);
+    // The colour space as the config spells it (an ACES config's ADX10),
+    // else the standard name.
+    std::string resolved;
+    if (Status s = ocio::find_colorspace(req.colorconfig, enc.colorspace, resolved); !s)
+        return s;
+    if (resolved.empty()) {
+        resolved = enc.colorspace;
+        report.warnings.push_back(std::string("output=") + output_kind_name(req.kind)
+                                  + ": the OCIO config has no colour space '" + enc.colorspace
+                                  + "': the EXR is tagged " + enc.colorspace
+                                  + " (SMPTE ST 2065-3) for a config that has one");
+    }
+    const float* pixels = nullptr;
+    OIIO::ImageBuf local;
+    if (Status s = local_density(density, static_cast<int>(names.size()), local, pixels); !s)
+        return s;
+    result                = rgb_like(density);
+    const size_t npixels  = static_cast<size_t>(density.spec().image_pixels());
+    report.clamped_values = encode_adx(pixels, npixels, static_cast<int>(names.size()), layers,
+                                       report.d_min, enc,
+                                       static_cast<float*>(result.localpixels()));
+    report.colorspace = resolved;
+    if (report.clamped_values)
+        report.warnings.push_back(
+            std::to_string(report.clamped_values) + " of the " + std::to_string(npixels * 3)
+            + " " + enc.colorspace + " code values were outside [0, "
+            + format_g(enc.max_code) + "] (density above D-min outside ["
+            + format_g(-enc.offset / enc.scale) + ", "
+            + format_g((enc.max_code - enc.offset) / enc.scale) + "]) and were clamped");
+    OIIO::ImageSpec& spec = result.specmod();
+    std::string dmin;
+    const char* rgb[3] = { "R", "G", "B" };
+    for (int c = 0; c < 3; ++c)
+        dmin += std::string(c ? ", " : "") + rgb[c] + " "
+                + format_g(report.d_min[static_cast<size_t>(layers[static_cast<size_t>(c)])]);
+    spec.attribute("filmgrain:quantity",
+                   std::string(enc.colorspace) + " code value / " + format_g(enc.max_code)
+                       + ": " + format_g(enc.offset) + " + " + format_g(enc.scale)
+                       + " x (density - D-min), SMPTE ST 2065-3");
+    spec.attribute("filmgrain:adx_dmin", dmin);
+    return {};
+}
+
+Status apply_regrain(const OutputRequest& req, const FilmgrainOptions& opts,
+                     const OIIO::ImageBuf& input, const OIIO::ImageBuf& density,
+                     OIIO::ImageBuf& result, OutputReport& report)
+{
+    const Stock& stock = opts.stock;
+    // The scan must be the input frame's grid: each scan pixel's mean is
+    // the input pixel under it.
+    const OIIO::ImageSpec& is = input.spec();
+    const int64_t frame_w = is.full_width > 0 ? is.full_width : is.width;
+    const int64_t frame_h = is.full_height > 0 ? is.full_height : is.height;
+    const int64_t fx = is.full_width > 0 ? is.full_x : is.x;
+    const int64_t fy = is.full_height > 0 ? is.full_y : is.y;
+    const OIIO::ImageSpec& ds = density.spec();
+    if (ds.full_width != frame_w || ds.full_height != frame_h)
+        return Status::errorf("output=regrain needs the scan at the input's size (", frame_w,
+                              "x", frame_h, "): the scan is ", ds.full_width, "x",
+                              ds.full_height, "; drop scan= (the positive's local mean is "
+                              "the input pixel under each scan pixel)");
+    if (is.nchannels != 1 && is.nchannels < 3)
+        return Status::errorf("output=regrain: the input has ", is.nchannels,
+                              " channels: expected 1 or at least 3");
+    std::vector<ExpectedCurve> curves;
+    if (Status s = expected_curves(stock, opts.scene, ExpectedCurveOptions(), curves); !s)
+        return Status::errorf("output=regrain: ", s.message());
+    RegrainModel model;
+    if (Status s = make_regrain_model(stock, std::move(curves), model); !s)
+        return s;
+    const std::string dst = req.ocolorspace.empty() ? std::string("scene_linear") : req.ocolorspace;
+    std::unique_ptr<ocio::Converter> conv;
+    if (Status s = ocio::Converter::create(req.colorconfig, "scene_linear", dst, conv); !s)
+        return Status::errorf("--ocolorspace ", dst, ": ", s.message());
+
+    const float* pixels = nullptr;
+    OIIO::ImageBuf local;
+    const int nl = static_cast<int>(stock.layers.size());
+    if (Status s = local_density(density, nl, local, pixels); !s)
+        return s;
+    result      = rgb_like(density);
+    float* out  = static_cast<float*>(result.localpixels());
+    const int w = ds.width, h = ds.height;
+    std::vector<float> in_row(static_cast<size_t>(w) * 3);
+    const int in_nc = is.nchannels;
+    for (int y = 0; y < h; ++y) {
+        // The input pixels under this row (black outside the data window).
+        const int64_t iy = fy + ds.y + y;
+        for (int x = 0; x < w; ++x) {
+            const int64_t ix = fx + ds.x + x;
+            float p[3]       = { 0.0f, 0.0f, 0.0f };
+            if (ix >= is.x && ix < is.x + is.width && iy >= is.y && iy < is.y + is.height) {
+                float px[4] = { 0.0f, 0.0f, 0.0f, 0.0f };
+                input.getpixel(static_cast<int>(ix), static_cast<int>(iy), 0, px,
+                               std::min(in_nc, 3));
+                if (in_nc == 1)
+                    px[1] = px[2] = px[0];
+                std::copy_n(px, 3, p);
+            }
+            std::copy_n(p, 3, &in_row[static_cast<size_t>(x) * 3]);
+        }
+        for (int x = 0; x < w; ++x) {
+            const size_t o = static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x);
+            regrain_pixel(model, &in_row[static_cast<size_t>(x) * 3], pixels + o * static_cast<size_t>(nl),
+                          out + o * 3);
+        }
+    }
+    conv->apply_rgb(out, static_cast<size_t>(w) * static_cast<size_t>(h));
+    report.colorspace = conv->destination_name();
+    result.specmod().attribute("filmgrain:quantity",
+                               "scene-linear positive: the input plus the film's grain "
+                               "(regrain), in " + report.colorspace);
+    return {};
+}
+
+}  // namespace
+
+Status apply_output(const OutputRequest& req, const FilmgrainOptions& opts,
+                    const OIIO::ImageBuf& input, const OIIO::ImageBuf& density,
+                    OIIO::ImageBuf& out, OutputReport& report)
+{
+    report = OutputReport();
+    try {
+        if (req.kind != OutputKind::regrain && !req.ocolorspace.empty())
+            return Status::errorf("--ocolorspace ", req.ocolorspace,
+                                  " applies to output=regrain only (the output is ",
+                                  output_kind_name(req.kind), ")");
+        OIIO::ImageBuf result;
+        switch (req.kind) {
+        case OutputKind::density:
+            if (&out != &density)
+                out.copy(density, OIIO::TypeUnknown);
+            out.specmod().attribute("filmgrain:output", output_kind_name(req.kind));
+            return {};
+        case OutputKind::adx10:
+        case OutputKind::adx16:
+            if (Status s = apply_adx(req, opts, density, result, report); !s)
+                return s;
+            break;
+        case OutputKind::regrain:
+            if (Status s = apply_regrain(req, opts, input, density, result, report); !s)
+                return s;
+            break;
+        }
+        OIIO::ImageSpec& spec = result.specmod();
+        spec.attribute("filmgrain:output", output_kind_name(req.kind));
+        spec.attribute("filmgrain:colorspace", report.colorspace);
+        spec.attribute("oiio:ColorSpace", report.colorspace);
+        out = std::move(result);
+        return {};
+    } catch (const std::exception& e) {
+        return Status::errorf("output=", output_kind_name(req.kind), ": ", e.what());
+    }
+}
+
+}  // namespace filmgrain::cli

@@ -1,0 +1,66 @@
+"""--filmgrain:output=: ADX code values and the regrain positive, end to end
+through the CLI (the transforms' own tests: plugin/src/output_transform_test.cpp)."""
+
+import numpy as np
+
+from conftest import FAST, Exr, read_json, write_image
+
+
+def layers(exr, names=("R", "G", "B")):
+    return np.stack([exr.channels[n] for n in names], axis=-1)
+
+
+def test_adx_is_the_density_above_dmin_in_code_values(run, tmp_path):
+    """The same render as density and as ADX10/ADX16: code value = offset +
+    scale (D - D-min), stored / max code, D-min per layer in the metadata."""
+    plate = write_image(tmp_path / "plate.exr",
+                        np.full((24, 32, 3), 0.18, np.float32) * np.linspace(0.05, 8, 32)[None, :, None])
+    base = f"--filmgrain:{FAST}:seed=5"
+    assert run(plate, base, "-o", tmp_path / "d.exr").returncode == 0
+    density = layers(Exr(tmp_path / "d.exr"))
+    for kind, offset, scale, top in (("adx10", 95, 500, 1023), ("adx16", 1520, 8000, 65535)):
+        out = tmp_path / f"{kind}.exr"
+        r = run(plate, f"{base}:output={kind}", "-o", out, "--stats", tmp_path / f"{kind}.json")
+        assert r.returncode == 0, r.stderr
+        exr = Exr(out)
+        assert exr.attr("filmgrain:output") == kind
+        assert exr.attr("filmgrain:colorspace") == kind.upper()
+        assert read_json(tmp_path / f"{kind}.json")["output"] == kind
+        dmin = dict(part.split() for part in exr.attr("filmgrain:adx_dmin").split(", "))
+        dmin = np.array([float(dmin[c]) for c in "RGB"])
+        expect = np.clip(np.round(offset + scale * (density - dmin)), 0, top) / top
+        # dmin is printed to 6 digits: a code value may round the other way.
+        assert np.abs(layers(exr) - expect).max() <= 1.0 / top + 1e-7
+        assert np.mean(layers(exr) == expect.astype(np.float32)) > 0.95
+
+
+def test_regrain_keeps_the_input_mean(run, tmp_path):
+    """A uniform grey patch through output=regrain: the mean is the input's
+    within 4 standard errors of the mean (the per-pixel sd over sqrt(n),
+    neighbouring pixels being correlated: n counted as pixels / 9)."""
+    grey = np.full((128, 128, 3), 0.18, np.float32)
+    plate = write_image(tmp_path / "grey.exr", grey)
+    out = tmp_path / "rg.exr"
+    r = run(plate, "--filmgrain:width_mm=6:seed=2:output=regrain", "-o", out)
+    assert r.returncode == 0, r.stderr
+    exr = Exr(out)
+    assert exr.attr("filmgrain:output") == "regrain"
+    v = layers(exr).reshape(-1, 3)
+    assert np.all(np.isfinite(v))
+    se = v.std(axis=0) / np.sqrt(v.shape[0] / 9)
+    assert np.all(np.abs(v.mean(axis=0) - 0.18) < 4 * se + 1e-6), (v.mean(axis=0), se)
+    assert np.all(v.std(axis=0) > 0)  # grain, not the input back
+
+
+def test_output_errors(run, tmp_path):
+    plate = write_image(tmp_path / "p.exr", np.full((24, 32, 3), 0.18, np.float32))
+    r = run(plate, f"--filmgrain:{FAST}:output=adx10", "--ocolorspace", "ACEScg", "-o",
+            tmp_path / "o.exr")
+    assert r.returncode == 1 and "--ocolorspace ACEScg applies to output=regrain" in r.stderr
+    r = run(plate, f"--filmgrain:{FAST}:output=regrain:scan=64", "-o", tmp_path / "o.exr")
+    assert r.returncode == 1 and "needs the scan at the input's size" in r.stderr, r.stderr
+    r = run(plate, f"--filmgrain:{FAST}:output=regrain", "--ocolorspace", "nonesuch", "-o",
+            tmp_path / "o.exr")
+    assert r.returncode == 1 and "nonesuch" in r.stderr, r.stderr
+    r = run(plate, f"--filmgrain:{FAST}:output=print", "-o", tmp_path / "o.exr")
+    assert r.returncode == 1 and "output=print" in r.stderr, r.stderr
