@@ -501,9 +501,12 @@ std::string help_text()
                    "negative density, -log10(transmittance) + the stock's base density. The full "
                    "(display) window is the whole scan, the data window the roi. Metadata: "
                    "filmgrain:output, filmgrain:quantity, filmgrain:stock (the stock as JSON), "
-                   "filmgrain:stock_name, filmgrain:seed, filmgrain:exposure_stops, "
+                   "filmgrain:stock_name, filmgrain:seed, filmgrain:frame and "
+                   "filmgrain:static (sequences), filmgrain:grain_seed, "
+                   "filmgrain:settings_hash, filmgrain:exposure_stops, "
                    "filmgrain:shutter_s, filmgrain:frame_width_mm, filmgrain:engine, "
-                   "filmgrain:version.");
+                   "filmgrain:version. Overscan (a data window beyond the display window) is "
+                   "rendered too, at negative coordinates and beyond the scan.");
     append_wrapped(out, "    ",
                    "adx10, adx16: Academy Density Exchange (SMPTE ST 2065-3), channels R, G, B: "
                    "code value = 95 + 500 D (adx10) or 1520 + 8000 D (adx16), rounded, clamped "
