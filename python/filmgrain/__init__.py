@@ -209,6 +209,8 @@ def render(
     tolerance=None,
     tile=None,
     output=None,
+    ocolorspace=None,
+    colorconfig=None,
     threads=0,
     progress=None,
     **expert,
@@ -259,9 +261,13 @@ def render(
             65535, R, G, B), or "regrain" (a scene-linear positive in the
             config's scene_linear whose local mean is the input and whose
             fluctuation is the film's grain; needs the scan at the input's
-            size). The colour config is $OCIO, else the embedded one. The
-            transforms' warnings (e.g. clamped ADX code values) are Python
-            UserWarnings.
+            size). The transforms' warnings (e.g. clamped ADX code values)
+            are Python UserWarnings.
+        ocolorspace: output="regrain" only (as the CLI's --ocolorspace):
+            the colour space of the positive, a name the colour config
+            knows. Default: its scene_linear.
+        colorconfig: the OCIO config file for output= (as the CLI's
+            --colorconfig). Default: $OCIO, else the embedded config.
         threads: worker threads, int in [0, 4096]; 0: OpenImageIO's
             default (all hardware threads unless changed). Never changes
             the output.
@@ -307,10 +313,23 @@ def render(
         output=output,
     )
     modifiers.update(expert)
-    return _render(pixels, stock, modifiers, threads, progress, None)
+    return _render(pixels, stock, modifiers, threads, progress, None,
+                   ocolorspace=ocolorspace, colorconfig=colorconfig)
 
 
-def _render(pixels, stock_value, modifiers, threads, progress, window):
+def _optional_text(name, value):
+    """None, or a non-empty str / os.PathLike as str."""
+    if value is None:
+        return None
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
+    if not isinstance(value, str) or not value:
+        raise TypeError(f"{name}={value!r}: expected a non-empty str")
+    return value
+
+
+def _render(pixels, stock_value, modifiers, threads, progress, window, ocolorspace=None,
+            colorconfig=None):
     image = _as_image(pixels)
     if isinstance(threads, bool) or not isinstance(threads, numbers.Integral):
         raise TypeError(f"threads={threads!r}: expected an int in [0, 4096]")
@@ -332,6 +351,8 @@ def _render(pixels, stock_value, modifiers, threads, progress, window):
         int(threads),
         progress,
         window,
+        _optional_text("ocolorspace", ocolorspace),
+        _optional_text("colorconfig", colorconfig),
     )
     x, y, w, h, scan_w, scan_h = region
     return Negative(
@@ -339,7 +360,8 @@ def _render(pixels, stock_value, modifiers, threads, progress, window):
     )
 
 
-def render_imagebuf(buf, *, stock=None, threads=0, progress=None, **modifiers):
+def render_imagebuf(buf, *, stock=None, threads=0, progress=None, ocolorspace=None,
+                    colorconfig=None, **modifiers):
     """:func:`render` for an OpenImageIO ImageBuf; returns (ImageBuf, stats).
 
     The pixels go through NumPy (``buf.get_pixels(OpenImageIO.FLOAT)``), so
@@ -373,7 +395,8 @@ def render_imagebuf(buf, *, stock=None, threads=0, progress=None, **modifiers):
         spec.height, spec.width, spec.nchannels
     )
     window = (spec.x, spec.y, spec.full_x, spec.full_y, spec.full_width, spec.full_height)
-    negative = _render(pixels, stock, modifiers, threads, progress, window)
+    negative = _render(pixels, stock, modifiers, threads, progress, window,
+                       ocolorspace=ocolorspace, colorconfig=colorconfig)
     return to_imagebuf(negative), negative.stats
 
 

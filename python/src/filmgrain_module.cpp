@@ -130,13 +130,16 @@ struct Interruption {
 using Window = std::optional<std::tuple<int, int, int, int, int, int>>;
 
 /// render(pixels, modifiers, stock_name, stock_json, threads, progress,
-/// window) -> (density, stats_json, attributes, data_window, channels).
+/// window, ocolorspace, colorconfig) -> (density, stats_json, attributes,
+/// data_window, channels).
 /// pixels: C-contiguous float32 (height, width, channels); the Python layer
 /// has checked dtype and shape and made it contiguous, this checks again.
 py::tuple render(py::array pixels, const std::string& modifiers,
                  const std::optional<std::string>& stock_name,
                  const std::optional<std::string>& stock_json, long long threads,
-                 py::object progress, const Window& window)
+                 py::object progress, const Window& window,
+                 const std::optional<std::string>& ocolorspace,
+                 const std::optional<std::string>& colorconfig)
 {
     const auto t_start = std::chrono::steady_clock::now();
     if (!py::isinstance<py::array_t<float>>(pixels) || pixels.ndim() != 3
@@ -229,8 +232,9 @@ py::tuple render(py::array pixels, const std::string& modifiers,
         Status s;
         {
             py::gil_scoped_release nogil;
-            s = cli::apply_output(cli::OutputRequest { cmd.output, "", "" }, opts, src, dst,
-                                  result, output_report);
+            s = cli::apply_output(cli::OutputRequest { cmd.output, colorconfig.value_or(""),
+                                                       ocolorspace.value_or("") },
+                                  opts, src, dst, result, output_report);
         }
         if (!s)
             throw Error(s.message());
@@ -326,7 +330,8 @@ PYBIND11_MODULE(_filmgrain, m)
     py::register_exception<fp::Error>(m, "Error", PyExc_ValueError);
     m.def("render", &fp::render, py::arg("pixels"), py::arg("modifiers"),
           py::arg("stock_name"), py::arg("stock_json"), py::arg("threads"),
-          py::arg("progress"), py::arg("window"),
+          py::arg("progress"), py::arg("window"), py::arg("ocolorspace"),
+          py::arg("colorconfig"),
           "Private: see filmgrain.render.");
     m.def("stock_json", &fp::stock_json, py::arg("name_or_path"),
           "A preset or stock file as complete JSON text.");

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import filmgrain
-from conftest import (FAST_WIDTH_MM, HEIGHT, WIDTH, assert_same_as_cli, render_cli, run_cli,
+from conftest import (FAST_WIDTH_MM, HEIGHT, WIDTH, Exr, assert_same_as_cli, modifier_text,
+                      read_json, render_cli, run_cli,
                       scene_pixels, write_exr)
 
 # Each case: the CLI's modifiers as written on its command line, and the same
@@ -153,3 +154,22 @@ def test_numbers_reach_the_core_exactly():
     assert negative.stats["frame_width_mm"] == width
     as_f32 = filmgrain.render(pixels, exposure=np.float32(0.1), width_mm=0.2)
     assert as_f32.stats["exposure_stops"] == float(np.float32(0.1))
+
+
+def test_regrain_to_another_colour_space_equals_cli(fg_bin, tmp_path, scene_exr):
+    """ocolorspace= is the CLI's --ocolorspace (output="regrain" only)."""
+    path, pixels = scene_exr
+    mods = {"seed": 6, "width_mm": FAST_WIDTH_MM, "output": "regrain"}
+    out, stats = tmp_path / "acescg.exr", tmp_path / "acescg.json"
+    r = run_cli(fg_bin, path, "--iscolorspace", "scene_linear", modifier_text(mods),
+                "--ocolorspace", "ACEScg", "-o", out, "--stats", stats, "-q")
+    assert r.returncode == 0, r.stderr
+    negative = filmgrain.render(pixels, ocolorspace="ACEScg", **mods)
+    assert_same_as_cli(negative, Exr(out), read_json(stats))
+    assert negative.attributes["filmgrain:colorspace"] == "ACEScg"
+    plain = filmgrain.render(pixels, **mods)
+    assert plain.density.tobytes() != negative.density.tobytes()
+    with pytest.raises(filmgrain.Error, match="applies to output=regrain"):
+        filmgrain.render(pixels, width_mm=FAST_WIDTH_MM, ocolorspace="ACEScg")
+    with pytest.raises(filmgrain.Error, match="nonesuch"):
+        filmgrain.render(pixels, ocolorspace="nonesuch", **mods)
