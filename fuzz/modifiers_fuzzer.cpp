@@ -44,7 +44,8 @@ void check_filmgrain(const std::string& arg)
         || cmd.scan_height > INT32_MAX)
         fail("accepted a scan outside [0, 2^31 - 1]", arg);
     if (cmd.has_roi
-        && (cmd.roi_x < 0 || cmd.roi_y < 0 || cmd.roi_width < 1 || cmd.roi_height < 1
+        && (cmd.roi_x < -INT32_MAX || cmd.roi_y < -INT32_MAX  // negative: overscan
+            || cmd.roi_width < 1 || cmd.roi_height < 1
             || cmd.roi_x + cmd.roi_width > INT32_MAX || cmd.roi_y + cmd.roi_height > INT32_MAX))
         fail("accepted a malformed roi", arg);
     if (cmd.stock.empty())
