@@ -4,6 +4,7 @@
 // DevelopCurve and its P(develop | mean photons), PopulationGrains' radius
 // at each size quantile).
 #include "filmgrain/expected_curve.h"
+#include "expected_curve_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -113,6 +114,102 @@ double ExpectedCurve::value_at_density(double density) const
     return points.back().value;
 }
 
+DevelopModels::DevelopModels(const Stock& stock, const ExpectedCurveOptions& options)
+    : m_development(stock), m_options(options)
+{
+}
+
+const DevelopModel& DevelopModels::get(const Population& pop, double shutter_s)
+{
+    for (const auto& m : m_models)
+        if (m->rates.k_pair_per_s == pop.k_pair_per_s && m->rates.k_join_per_s == pop.k_join_per_s
+            && m->rates.k_loss_per_s == pop.k_loss_per_s && m->shutter_s == shutter_s)
+            return *m;
+    auto m       = std::make_unique<DevelopModel>();
+    m->rates     = { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s };
+    m->shutter_s = shutter_s;
+    // fog_only reads P at 0 photons only (exact: the fog probability), so
+    // its tables hold the minimum.
+    const bool fog_only = m_options.fog_only;
+    DevelopTable::Options o;
+    o.max_photons           = fog_only ? 64 : m_options.max_photons;
+    o.target_standard_error = fog_only ? 0.1 : m_options.target_standard_error;
+    o.min_samples           = fog_only ? 32 : o.min_samples;
+    o.stream_key            = hash_ids(0xe7c0ffee, m_models.size());
+    o.nthreads              = m_options.nthreads;
+    m->table = std::make_unique<DevelopTable>(m->rates, shutter_s, m_development, o);
+    m->curve = std::make_unique<DevelopCurve>(*m->table, fog_only ? 2 : 4096);
+    m->probability_error = fog_only ? 0.0
+                                    : 2.0 * m->table->max_standard_error()
+                                          + m->table->max_interpolation_error()
+                                          + m->curve->max_interpolation_error();
+    m_models.push_back(std::move(m));
+    return *m_models.back();
+}
+
+LayerModel::LayerModel(const Stock& stock, size_t l, const SceneSettings& scene,
+                       DevelopModels& models)
+    : m_lxs_per_value(exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops))
+{
+    const Layer& layer = stock.layers[l];
+    m_grains.reserve(layer.populations.size());  // m_pops points into it
+    for (size_t p = 0; p < layer.populations.size(); ++p) {
+        const Population& pop = layer.populations[p];
+        const DevelopModel& s = models.get(pop, scene.shutter_s);
+        m_grains.emplace_back(pop, 0, static_cast<uint32_t>(l), static_cast<uint32_t>(p));
+        m_pops.push_back({ &pop, &m_grains.back(),
+                           pop.quantum_efficiency * kPhotonsPerUm2PerLxs * m_lxs_per_value,
+                           s.curve.get(), s.table.get() });
+        // K = sum n E[a P]: an error e in P moves it by at most n E[a] e;
+        // the grains beyond the quadrature (z > 9) hold at most the
+        // share Phi(2 s - 9) of n E[a]; the trapezoid rule's own error
+        // on this smooth, Gaussian-damped integrand is far below both.
+        const double n_area = pop.grains_per_um2 * m_grains.back().mean_area_um2();
+        m_coverage_error += n_area
+                            * (s.probability_error
+                               + normal_upper_tail(kSizeQuadratureZ - 2.0 * pop.diameter_log_sigma));
+    }
+}
+
+ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& model, bool fog_only)
+{
+    const std::vector<PixelPopulation>& pops = model.populations();
+    const double lxs_per_value               = model.lxs_per_value();
+    ExpectedCurve curve;
+    curve.layer        = stock.layers[l].name;
+    curve.base_density = stock.base_density;
+    curve.max_density  = stock.max_density;
+    const auto point = [&](double v) {
+        CurvePoint c;
+        c.value         = v;
+        c.exposure_lxs  = v * lxs_per_value;
+        c.transmittance = mean_transmittance(pops, v);
+        c.density       = clamp_density(c.transmittance, stock.base_density, stock.max_density);
+        return c;
+    };
+    curve.points.push_back(point(0.0));
+    double interpolation = 0.0;  // largest relative error of E[T] between points
+    if (!fog_only) {
+        const double grey   = kGreyValue;
+        const double log_v0 = std::log(grey) - kOctavesBelow * std::log(2.0);
+        const double step   = std::log(2.0) / kPerOctave;
+        for (int i = 0; i <= (kOctavesBelow + kOctavesAbove) * kPerOctave; ++i) {
+            curve.points.push_back(point(std::exp(log_v0 + i * step)));
+            if (i == 0)
+                continue;
+            // Linear interpolation in ln v errs most half-way.
+            const CurvePoint& a = curve.points[curve.points.size() - 2];
+            const CurvePoint& b = curve.points.back();
+            const double mid    = mean_transmittance(pops, std::exp(log_v0 + (i - 0.5) * step));
+            interpolation = std::max(
+                interpolation, std::fabs(0.5 * (a.transmittance + b.transmittance) - mid) / mid);
+        }
+    }
+    // d(-log10 T) = 0.434 dT / T, and dK = -dT / T.
+    curve.density_error = kLog10E * (model.coverage_error() + interpolation);
+    return curve;
+}
+
 Status expected_curves(const Stock& stock, const SceneSettings& scene,
                        const ExpectedCurveOptions& options, std::vector<ExpectedCurve>& out)
 {
@@ -138,101 +235,15 @@ Status expected_curves(const Stock& stock, const SceneSettings& scene,
                         ": P(develop | N) then depends on the grain's size, so the layer has no "
                         "single tabulated curve (only 0 is supported)");
 
-    const Development development(stock);
-    const double lxs_per_value
-        = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
-    // Tables of P(develop | N), one per distinct set of rates (MODEL.md 3-4).
-    // fog_only reads P at 0 photons only (exact: the fog probability), so
-    // its tables hold the minimum.
-    struct Shared {
-        KineticsRates rates;
-        std::unique_ptr<DevelopTable> table;
-        std::unique_ptr<DevelopCurve> curve;
-    };
-    std::vector<Shared> shared;
-    const auto tables_for = [&](const Population& pop) -> const Shared& {
-        for (const Shared& s : shared)
-            if (s.rates.k_pair_per_s == pop.k_pair_per_s && s.rates.k_join_per_s == pop.k_join_per_s
-                && s.rates.k_loss_per_s == pop.k_loss_per_s)
-                return s;
-        Shared s;
-        s.rates = { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s };
-        DevelopTable::Options o;
-        o.max_photons           = options.fog_only ? 64 : options.max_photons;
-        o.target_standard_error = options.fog_only ? 0.1 : options.target_standard_error;
-        o.min_samples           = options.fog_only ? 32 : o.min_samples;
-        o.stream_key            = hash_ids(0xe7c0ffee, shared.size());
-        o.nthreads              = options.nthreads;
-        s.table = std::make_unique<DevelopTable>(s.rates, scene.shutter_s, development, o);
-        s.curve = std::make_unique<DevelopCurve>(*s.table, options.fog_only ? 2 : 4096);
-        shared.push_back(std::move(s));
-        return shared.back();
-    };
-    // Build every table first (shared.push_back may move the elements).
+    DevelopModels models(stock, options);
+    // Build every table first, in stock order (their streams are keyed by
+    // that order).
     for (const Layer& layer : stock.layers)
         for (const Population& pop : layer.populations)
-            tables_for(pop);
-
-    const double grey = kGreyValue;
+            models.get(pop, scene.shutter_s);
     for (size_t l = 0; l < stock.layers.size(); ++l) {
-        const Layer& layer = stock.layers[l];
-        std::vector<PopulationGrains> grains;
-        grains.reserve(layer.populations.size());
-        std::vector<PixelPopulation> pops;
-        double error_k = 0.0;  // bound on the error of the coverage exponent K
-        for (size_t p = 0; p < layer.populations.size(); ++p) {
-            const Population& pop = layer.populations[p];
-            const Shared& s       = tables_for(pop);
-            grains.emplace_back(pop, 0, static_cast<uint32_t>(l), static_cast<uint32_t>(p));
-            pops.push_back({ &pop, &grains.back(),
-                             pop.quantum_efficiency * kPhotonsPerUm2PerLxs * lxs_per_value,
-                             s.curve.get(), s.table.get() });
-            // K = sum n E[a P]: an error e in P moves it by at most n E[a] e;
-            // the grains beyond the quadrature (z > 9) hold at most the
-            // share Phi(2 s - 9) of n E[a]; the trapezoid rule's own error
-            // on this smooth, Gaussian-damped integrand is far below both.
-            const double n_area = pop.grains_per_um2 * grains.back().mean_area_um2();
-            const double p_error
-                = options.fog_only ? 0.0
-                                   : 2.0 * s.table->max_standard_error()
-                                         + s.table->max_interpolation_error()
-                                         + s.curve->max_interpolation_error();
-            error_k += n_area
-                       * (p_error + normal_upper_tail(kSizeQuadratureZ - 2.0 * pop.diameter_log_sigma));
-        }
-        ExpectedCurve curve;
-        curve.layer        = layer.name;
-        curve.base_density = stock.base_density;
-        curve.max_density  = stock.max_density;
-        const auto point = [&](double v) {
-            CurvePoint c;
-            c.value         = v;
-            c.exposure_lxs  = v * lxs_per_value;
-            c.transmittance = mean_transmittance(pops, v);
-            c.density       = clamp_density(c.transmittance, stock.base_density,
-                                            stock.max_density);
-            return c;
-        };
-        curve.points.push_back(point(0.0));
-        double interpolation = 0.0;  // largest relative error of E[T] between points
-        if (!options.fog_only) {
-            const double log_v0 = std::log(grey) - kOctavesBelow * std::log(2.0);
-            const double step   = std::log(2.0) / kPerOctave;
-            for (int i = 0; i <= (kOctavesBelow + kOctavesAbove) * kPerOctave; ++i) {
-                curve.points.push_back(point(std::exp(log_v0 + i * step)));
-                if (i == 0)
-                    continue;
-                // Linear interpolation in ln v errs most half-way.
-                const CurvePoint& a = curve.points[curve.points.size() - 2];
-                const CurvePoint& b = curve.points.back();
-                const double mid    = mean_transmittance(pops, std::exp(log_v0 + (i - 0.5) * step));
-                interpolation = std::max(
-                    interpolation, std::fabs(0.5 * (a.transmittance + b.transmittance) - mid) / mid);
-            }
-        }
-        // d(-log10 T) = 0.434 dT / T, and dK = -dT / T.
-        curve.density_error = kLog10E * (error_k + interpolation);
-        out.push_back(std::move(curve));
+        const LayerModel model(stock, l, scene, models);
+        out.push_back(expected_curve(stock, l, model, options.fog_only));
     }
     return {};
 }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "boolean_model.h"
+#include "expected_curve_model.h"
 
 namespace filmgrain::sensitometry {
 namespace {
@@ -43,13 +44,10 @@ TEST(BooleanModel, FineGridApertureVarianceApproachesTheIdealDisc)
 {
     const BooleanLayer b = monodisperse(0.1, 6.0, 0.7);
     const double r_ap    = 12.0;
-    // Ideal disc: Var = (1/A^2) integral C(h) lens(R, h) 2 pi h dh.
-    double ideal = 0.0;
-    const double dh = 0.001;
-    for (double h = 0.5 * dh; h < 6.0; h += dh)
-        ideal += b.covariance(h) * lens_area_um2(r_ap, h) * 2.0 * M_PI * h * dh;
-    const double a = M_PI * r_ap * r_ap;
-    ideal /= a * a;
+    // Ideal disc: Var = (1/A^2) integral C(h) lens(R, h) 2 pi h dh (what
+    // the datasheet figures read, datasheet.h).
+    const double ideal = disc_aperture_transmittance_variance(b, 2.0 * r_ap);
+    const double dh    = 0.001;
     // 0.25 um pixels: the pixel-weighted aperture differs from the disc only
     // in a band of one pixel around its rim (1/48 of the radius), which
     // changes the variance by well under 1%.
@@ -66,6 +64,25 @@ TEST(BooleanModel, FineGridApertureVarianceApproachesTheIdealDisc)
     const double var_sq   = square_transmittance_variance(b, side_px, 2.0);
     // Edge loss ~ perimeter * mean overlap distance / area ~ 4 * 3 um / 1000 um.
     EXPECT_NEAR(var_sq * std::pow(side_px * 2.0, 2) / integral, 1.0, 0.02);
+}
+
+TEST(BooleanModel, LayerFromTheExpectedCurvesPiecesHasTheirCoverage)
+{
+    // boolean_layer_at composes the core's size quadrature and P(develop |
+    // mean photons): its K(0) is coverage_exponent's, term for term.
+    Stock stock;
+    ASSERT_TRUE(load_stock("paper", stock));
+    ExpectedCurveOptions o;
+    o.target_standard_error = 1e-2;
+    o.max_photons           = 256;
+    DevelopModels models(stock, o);
+    const LayerModel model(stock, 0, SceneSettings(), models);
+    for (double v : { 0.0, 0.05, 0.18, 0.7 }) {
+        const BooleanLayer b = boolean_layer_at(model.populations(), v);
+        EXPECT_NEAR(b.coverage(), coverage_exponent(model.populations(), v),
+                    1e-12 * (1.0 + b.coverage()))
+            << "v " << v;
+    }
 }
 
 }  // namespace

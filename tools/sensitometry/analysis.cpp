@@ -105,6 +105,13 @@ double interpolate(const std::vector<double>& x, const std::vector<double>& y, d
     return y.back();
 }
 
+double iso6_speed(double h_m_lxs) { return 0.8 / h_m_lxs; }
+
+double iso5800_speed(double h_green_lxs, double h_slowest_lxs)
+{
+    return std::sqrt(2.0) / std::sqrt(h_green_lxs * h_slowest_lxs);
+}
+
 CurveMetrics analyse_curve(const LayerCurve& c)
 {
     CurveMetrics m;
@@ -112,8 +119,8 @@ CurveMetrics analyse_curve(const LayerCurve& c)
     if (c.density.size() < 3)
         return m;
     m.d_max         = *std::max_element(c.density.begin(), c.density.end());
-    m.speed_log10_h = first_crossing(c.log10_h, c.density, c.fog_density + 0.10);
-    m.iso_speed     = 0.8 / std::pow(10.0, m.speed_log10_h);
+    m.speed_log10_h = first_crossing(c.log10_h, c.density, c.fog_density + kIso6SpeedNetDensity);
+    m.iso_speed     = iso6_speed(std::pow(10.0, m.speed_log10_h));
     // Gamma: the steepest 0.6 log H window.
     const std::vector<double> wide = local_slopes(c.log10_h, c.density, c.density_se, 0.3);
     size_t g = 0;

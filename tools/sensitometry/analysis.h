@@ -33,6 +33,17 @@ double first_crossing(const std::vector<double>& x, const std::vector<double>& y
 /// Piecewise-linear interpolation of y at x0 (clamped at the ends).
 double interpolate(const std::vector<double>& x, const std::vector<double>& y, double x0);
 
+/// ISO 6 (black-and-white negative): the speed point is the exposure H_m
+/// (lux-seconds) at which the density is this much above base + fog.
+inline constexpr double kIso6SpeedNetDensity = 0.10;
+/// ISO 6 arithmetic speed S = 0.8 / H_m.
+double iso6_speed(double h_m_lxs);
+/// ISO 5800 (colour negative): H_G and H_slow are the exposures at which
+/// the green and the slowest layer reach this much above their D-min.
+inline constexpr double kIso5800SpeedNetDensity = 0.15;
+/// ISO 5800 arithmetic speed S = sqrt(2) / H_M, H_M = sqrt(H_G H_slow).
+double iso5800_speed(double h_green_lxs, double h_slowest_lxs);
+
 /// Operational definitions of the ISO 6 / classical sensitometric numbers.
 struct CurveMetrics {
     double base_fog_density = 0.0;  ///< unexposed patch

@@ -12,6 +12,7 @@
 #include "expectations.h"
 #include "exposure.h"
 #include "kinetics.h"
+#include "pixel_model.h"
 
 namespace filmgrain::sensitometry {
 
@@ -208,6 +209,31 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
     return {};
 }
 
+BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, double value,
+                              double h_step_um)
+{
+    std::vector<PopulationDevelopment> pops;
+    for (const PixelPopulation& pp : populations) {
+        PopulationDevelopment d;
+        d.grains_per_um2 = pp.population->grains_per_um2;
+        for (const filmgrain::SizeNode& q : size_quadrature(*pp.population)) {
+            const double r_um  = pp.grains->radius_at_z_um(q.z);
+            const double a_um2 = M_PI * r_um * r_um;
+            SizeNode node;
+            node.diameter_um         = 2.0 * r_um;
+            node.weight              = q.weight;
+            node.develop_probability = pixel_develop_probability(
+                pp, pp.photons_per_value_um2 * value * a_um2);
+            d.develop_fraction += node.weight * node.develop_probability;
+            d.area_developed_um2 += node.weight * a_um2 * node.develop_probability;
+            d.area2_developed_um4 += node.weight * a_um2 * a_um2 * node.develop_probability;
+            d.nodes.push_back(node);
+        }
+        pops.push_back(std::move(d));
+    }
+    return BooleanLayer(pops, h_step_um);
+}
+
 Status exposure_for_predicted_density(const Stock& stock, size_t layer, double net_density,
                                       double shutter_s, double log10_h_guess, double& log10_h)
 {
@@ -364,6 +390,21 @@ double aperture_transmittance_variance(const BooleanLayer& layer,
             var += rl * cpix[static_cast<size_t>((ly + lag_max) * lag_side + lx + lag_max)];
         }
     return var / (w_total * w_total);
+}
+
+double disc_aperture_transmittance_variance(const BooleanLayer& layer, double diameter_um)
+{
+    const double r_um    = 0.5 * diameter_um;
+    const double area    = M_PI * r_um * r_um;
+    const double step_um = 0.5 * std::min(0.02, r_um / 64.0);
+    const size_t steps   = static_cast<size_t>(std::ceil(std::min(layer.range_um(), diameter_um)
+                                                       / step_um));
+    double sum = 0.0;
+    for (size_t i = 0; i < steps; ++i) {
+        const double h = (static_cast<double>(i) + 0.5) * step_um;
+        sum += layer.covariance(h) * lens_area_um2(r_um, h) * h;
+    }
+    return 2.0 * M_PI * sum * step_um / (area * area);
 }
 
 double square_transmittance_variance(const BooleanLayer& layer, int64_t side_px, double pitch_um)

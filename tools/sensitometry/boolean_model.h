@@ -11,6 +11,10 @@
 #include "filmgrain/stock.h"
 #include "filmgrain/status.h"
 
+namespace filmgrain {
+struct PixelPopulation;
+}
+
 namespace filmgrain::sensitometry {
 
 /// One node of the diameter quadrature: a diameter, its probability weight
@@ -91,6 +95,16 @@ private:
 Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, double shutter_s,
                      int max_samples, uint64_t seed, BooleanLayer& out, int min_samples = 16);
 
+/// The Boolean layer of one layer at exposure value v, from the pieces the
+/// core's expected curve is made of (core/src/expected_curve_model.h:
+/// LayerModel::populations()): the one size quadrature (size_quadrature,
+/// |z| <= 9) and P(develop | mean photons) of the tabulated chain
+/// (pixel_develop_probability). No chain runs: for evaluating many
+/// exposures and stocks against tables built once (filmgrain-fit). Its
+/// coverage() is coverage_exponent(populations, v) term for term.
+BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, double value,
+                              double h_step_um = 0.02);
+
 /// log10 of the neutral exposure at which the predicted net density of
 /// `layer` (fog included, base excluded) equals `net_density`: steps of 0.5
 /// from `log10_h_guess` until bracketed, then bisection to 0.002, with
@@ -129,6 +143,14 @@ ApertureTemplate make_circular_aperture(double diameter_um, double pitch_um);
 /// densitometer uses (pixel-grid aperture), not of an ideal disc.
 double aperture_transmittance_variance(const BooleanLayer& layer,
                                        const ApertureTemplate& aperture);
+
+/// Variance of the mean transmittance through an ideal circular aperture
+/// of `diameter_um` (a densitometer's, not sampled on pixels) under the
+/// Boolean model: Var = (1/A^2) integral of C(|h|) g(|h|) d^2h, with
+/// g(h) = lens_area_um2(R, h) the aperture's set covariance (the area it
+/// shares with itself shifted by h) and A = pi R^2; radial midpoint rule
+/// on the layer's own h grid out to range_um(). Exact for any grain size.
+double disc_aperture_transmittance_variance(const BooleanLayer& layer, double diameter_um);
 
 /// Variance of the mean transmittance of a square of side_px x side_px
 /// pixels of side pitch_um under the Boolean model (uniform weights; same

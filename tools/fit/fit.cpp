@@ -1,0 +1,580 @@
+// filmgrain-fit's search (fit.h).
+#include "fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include <nlopt.hpp>
+
+#include "expected_curve_model.h"
+#include "analysis.h"
+#include "granularity.h"
+#include "patch.h"
+#include "strip.h"
+#include "rng.h"
+
+namespace filmgrain::fit {
+
+namespace sm = filmgrain::sensitometry;
+
+namespace {
+
+constexpr double kStopsPerDecade = 3.3219280948873623;
+constexpr double kLog10E         = 0.43429448190325176;
+/// What an objective returns for a candidate that cannot be measured (its
+/// curve never reaches a target density): far above any measurable one.
+constexpr double kUnmeasurable = 1e6;
+
+/// Bounds of the population search (real emulsion scale; the stock
+/// format's ranges are wider; at most 15 grains per um^2 per population,
+/// 30 per layer at the default 2 populations, the issue's 3-30): log10
+/// grains_per_um2, log10 diameter_um,
+/// diameter_log_sigma, log10 quantum_efficiency.
+constexpr double kLo[4] = { std::log10(0.5), std::log10(0.2), 0.05, -2.0 };
+constexpr double kHi[4] = { std::log10(15.0), std::log10(3.0), 0.8, 0.0 };
+/// Bounds of the rate search, log10 per second: k_pair, k_join, k_loss.
+constexpr double kRateLo[3] = { 3.0, 2.0, -3.0 };
+constexpr double kRateHi[3] = { 12.0, 11.0, 5.0 };
+
+std::string format(double x, int precision = 4)
+{
+    std::ostringstream o;
+    o.precision(precision);
+    o << x;
+    return o.str();
+}
+
+/// A uniform in [0, 1) from (seed, ids): the fit's only randomness.
+double uniform(uint64_t seed, uint64_t a, uint64_t b, uint64_t c)
+{
+    return static_cast<double>(hash_ids(seed, a, b, c) >> 11) * 0x1.0p-53;
+}
+
+std::array<double, 3> luma_or_primary(const std::string& name)
+{
+    if (name == "R")
+        return { 1.0, 0.0, 0.0 };
+    if (name == "G")
+        return { 0.0, 1.0, 0.0 };
+    if (name == "B")
+        return { 0.0, 0.0, 1.0 };
+    return { 0.2126, 0.7152, 0.0722 };
+}
+
+
+/// The speed point every layer aims at: ISO 6 H_m = 0.8 / S; ISO 5800
+/// H_M = sqrt(2) / S, every layer equally fast (so H_G = H_slow = H_M).
+double target_speed_log10_h(const sm::Datasheet& sheet)
+{
+    const double s = *sheet.speed;
+    return sheet.speed_standard == "ISO 5800" ? std::log10(std::sqrt(2.0) / s)
+                                              : std::log10(0.8 / s);
+}
+
+/// Squared misses of one layer's figures in tolerance units (D-min aside:
+/// the base absorbs it; only fog above the target D-min counts).
+double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::DatasheetFigures& f,
+                       double base_density)
+{
+    const sm::LayerTargets& t         = sheet.layers[i];
+    const sm::DatasheetFigures::Layer& l = f.layers[i];
+    const sm::Tolerances tol;
+    double j = 0.0;
+    if (sheet.speed) {
+        const double r = kStopsPerDecade * (l.speed_log10_h.value - target_speed_log10_h(sheet))
+                         / tol.speed_stops;
+        j += r * r;
+    }
+    if (t.slope) {
+        const double r = (l.slope.value - *t.slope) / tol.slope;
+        j += r * r;
+    }
+    for (size_t g = 0; g < t.granularity.size(); ++g) {
+        const double r = (l.granularity[g].value / t.granularity[g].rms - 1.0) / tol.granularity_rel;
+        j += r * r;
+    }
+    if (t.d_min) {
+        const double fog = l.d_min.value - base_density;
+        const double r   = std::max(0.0, fog - *t.d_min) / tol.d_min;
+        j += r * r;
+    }
+    return j;
+}
+
+/// The base density that puts the stock's D-min on the datasheet's (the
+/// mean over layers when they differ: one base per stock), >= 0.
+double fitted_base(const sm::Datasheet& sheet, const sm::DatasheetFigures& f, double base_now)
+{
+    double sum = 0.0;
+    int n      = 0;
+    for (size_t i = 0; i < sheet.layers.size(); ++i)
+        if (sheet.layers[i].d_min) {
+            sum += *sheet.layers[i].d_min - (f.layers[i].d_min.value - base_now);
+            ++n;
+        }
+    return n ? std::max(0.0, sum / n) : base_now;
+}
+
+/// Reciprocity misses in tolerance units.
+double reciprocity_objective(const sm::Datasheet& sheet, const sm::DatasheetFigures& f)
+{
+    double j = 0.0;
+    for (const sm::Comparison& c : sm::compare_figures(sheet, f))
+        if (c.figure.rfind("reciprocity", 0) == 0) {
+            const double r = std::isfinite(c.miss) ? c.miss / c.tolerance : 1e3;
+            j += r * r;
+        }
+    return j;
+}
+
+void set_population(Population& p, const double* x)
+{
+    p.grains_per_um2     = std::pow(10.0, x[0]);
+    p.diameter_um        = std::pow(10.0, x[1]);
+    p.diameter_log_sigma = x[2];
+    p.quantum_efficiency = std::pow(10.0, x[3]);
+}
+
+void get_population(const Population& p, double* x)
+{
+    x[0] = std::log10(p.grains_per_um2);
+    x[1] = std::log10(p.diameter_um);
+    x[2] = p.diameter_log_sigma;
+    x[3] = std::log10(p.quantum_efficiency);
+    for (int k = 0; k < 4; ++k)
+        x[k] = std::clamp(x[k], kLo[k], kHi[k]);
+}
+
+class Search {
+public:
+    Search(const sm::Datasheet& sheet, const FitOptions& options, Stock& stock, int& evaluations)
+        : m_sheet(sheet), m_options(options), m_stock(stock), m_evaluations(evaluations)
+    {
+    }
+
+    void say(const std::string& s) const
+    {
+        if (m_options.progress)
+            m_options.progress(s);
+    }
+
+    /// Stage A for layer i of the datasheet (stock layer with that name).
+    Status populations(size_t i, int round)
+    {
+        size_t l = 0;
+        while (m_stock.layers[l].name != m_sheet.layers[i].name)
+            ++l;
+        const size_t np = m_stock.layers[l].populations.size();
+        const size_t n  = 4 * np;
+        std::vector<double> x0(n), lo(n), hi(n);
+        for (size_t p = 0; p < np; ++p) {
+            get_population(m_stock.layers[l].populations[p], &x0[4 * p]);
+            for (int k = 0; k < 4; ++k) {
+                lo[4 * p + k] = kLo[k];
+                hi[4 * p + k] = kHi[k];
+            }
+        }
+        // Tables at 1/100 s for the current rates: built once here.
+        DevelopModels models(m_stock, m_options.search_curve);
+        sm::FigureOptions fo;
+        fo.curve       = m_options.search_curve;
+        fo.reciprocity = false;
+        Stock trial    = m_stock;
+        const auto objective = [&](const std::vector<double>& x) {
+            for (size_t p = 0; p < np; ++p)
+                set_population(trial.layers[l].populations[p], &x[4 * p]);
+            sm::DatasheetFigures f;
+            ++m_evaluations;
+            if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
+                return kUnmeasurable;
+            return layer_objective(m_sheet, i, f, trial.base_density);
+        };
+        std::vector<double> best = x0;
+        double best_j            = objective(x0);
+        for (int s = 0; s < m_options.starts; ++s) {
+            std::vector<double> x = s == 0 ? best : x0;
+            if (s > 0)
+                for (size_t k = 0; k < n; ++k) {
+                    // Jitter by up to +-15% of the range around the start.
+                    const double u = uniform(m_options.seed, round * 131 + i, s, k);
+                    x[k] = std::clamp(x[k] + (u - 0.5) * 0.3 * (hi[k] - lo[k]), lo[k], hi[k]);
+                }
+            nlopt::opt opt(nlopt::LN_SBPLX, static_cast<unsigned>(n));
+            opt.set_lower_bounds(lo);
+            opt.set_upper_bounds(hi);
+            opt.set_maxeval(m_options.population_evals);
+            opt.set_stopval(1e-4);
+            opt.set_xtol_abs(1e-5);
+            std::vector<double> step(n);
+            for (size_t k = 0; k < n; ++k)
+                step[k] = 0.08 * (hi[k] - lo[k]);
+            opt.set_initial_step(step);
+            struct Ctx {
+                decltype(objective)* f;
+                std::vector<double>* best;
+                double* best_j;
+            } ctx { &objective, &best, &best_j };
+            opt.set_min_objective(
+                [](const std::vector<double>& x, std::vector<double>&, void* data) {
+                    Ctx* c         = static_cast<Ctx*>(data);
+                    const double j = (*c->f)(x);
+                    if (j < *c->best_j) {
+                        *c->best_j = j;
+                        *c->best   = x;
+                    }
+                    return j;
+                },
+                &ctx);
+            double minf = 0.0;
+            try {
+                opt.optimize(x, minf);
+            } catch (const std::exception&) {
+                // Roundoff or forced stops: the best point is kept above.
+            }
+            say("  round " + std::to_string(round + 1) + ", layer " + m_sheet.layers[i].name
+                + ", start " + std::to_string(s + 1) + ": objective " + format(best_j)
+                + " (1 = one figure at tolerance), " + std::to_string(m_evaluations)
+                + " evaluations so far");
+            if (best_j < 1e-4)
+                break;
+        }
+        for (size_t p = 0; p < np; ++p)
+            set_population(m_stock.layers[l].populations[p], &best[4 * p]);
+        return {};
+    }
+
+    /// Base density from the D-min targets (search precision).
+    Status base()
+    {
+        DevelopModels models(m_stock, m_options.search_curve);
+        sm::FigureOptions fo;
+        fo.curve       = m_options.search_curve;
+        fo.reciprocity = false;
+        fo.granularity = false;
+        sm::DatasheetFigures f;
+        if (Status s = sm::measure_datasheet_figures(m_stock, m_sheet, models, fo, f); !s)
+            return s;
+        m_stock.base_density = fitted_base(m_sheet, f, m_stock.base_density);
+        return {};
+    }
+
+    /// Stage B: the rates shared by every population.
+    Status rates(int round)
+    {
+        std::vector<double> x(3);
+        const Population& p0 = m_stock.layers[0].populations[0];
+        x[0] = std::clamp(std::log10(p0.k_pair_per_s), kRateLo[0], kRateHi[0]);
+        x[1] = std::clamp(std::log10(p0.k_join_per_s), kRateLo[1], kRateHi[1]);
+        x[2] = std::clamp(std::log10(p0.k_loss_per_s), kRateLo[2], kRateHi[2]);
+        sm::FigureOptions fo;
+        fo.curve       = m_options.rate_curve;
+        fo.granularity = false;
+        Stock trial    = m_stock;
+        const auto set_rates = [](Stock& s, const std::vector<double>& r) {
+            for (Layer& l : s.layers)
+                for (Population& p : l.populations) {
+                    p.k_pair_per_s = std::pow(10.0, r[0]);
+                    p.k_join_per_s = std::pow(10.0, r[1]);
+                    p.k_loss_per_s = std::pow(10.0, r[2]);
+                }
+        };
+        std::vector<double> best = x;
+        double best_j            = INFINITY;
+        const auto objective = [&](const std::vector<double>& r) {
+            set_rates(trial, r);
+            DevelopModels models(trial, m_options.rate_curve);
+            sm::DatasheetFigures f;
+            ++m_evaluations;
+            if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
+                return kUnmeasurable;
+            const double j = reciprocity_objective(m_sheet, f);
+            if (j < best_j) {
+                best_j = j;
+                best   = r;
+            }
+            return j;
+        };
+        objective(x);
+        nlopt::opt opt(nlopt::LN_SBPLX, 3);
+        opt.set_lower_bounds(std::vector<double>(kRateLo, kRateLo + 3));
+        opt.set_upper_bounds(std::vector<double>(kRateHi, kRateHi + 3));
+        opt.set_maxeval(m_options.rate_evals);
+        opt.set_stopval(1e-3);
+        opt.set_xtol_abs(1e-3);
+        opt.set_initial_step(std::vector<double>(3, 0.3));
+        opt.set_min_objective(
+            [](const std::vector<double>& r, std::vector<double>&, void* data) {
+                return (*static_cast<decltype(objective)*>(data))(r);
+            },
+            const_cast<void*>(static_cast<const void*>(&objective)));
+        double minf = 0.0;
+        try {
+            opt.optimize(x, minf);
+        } catch (const std::exception&) {
+        }
+        set_rates(m_stock, best);
+        say("  round " + std::to_string(round + 1) + ", rates: k_pair " + format(std::pow(10.0, best[0]))
+            + " /s, k_join " + format(std::pow(10.0, best[1])) + " /s, k_loss "
+            + format(std::pow(10.0, best[2])) + " /s: objective " + format(best_j) + ", "
+            + std::to_string(m_evaluations) + " evaluations so far");
+        return {};
+    }
+
+private:
+    const sm::Datasheet& m_sheet;
+    const FitOptions& m_options;
+    Stock& m_stock;
+    int& m_evaluations;
+};
+
+}  // namespace
+
+Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stock& out)
+{
+    if (sheet.layers.empty())
+        return Status::errorf("datasheet '", sheet.name, "' has no layers");
+    if (!sheet.speed)
+        return Status::errorf("datasheet '", sheet.name, "' gives no speed: the fit needs one");
+    Stock s;
+    s.name        = sheet.name;
+    s.description = "Fitted by filmgrain-fit to the published figures of " + sheet.name
+                    + " (speed, slope, D-min, RMS granularity, reciprocity); a model of "
+                      "those figures, not the product.";
+    s.exposure_at_grey_lxs = 10.0 / *sheet.speed;
+    s.development_time_s   = options.development_time_s;
+    s.development_tau_s    = options.development_tau_s;
+    s.fog_tau_s            = options.fog_tau_s;
+    s.base_density         = 0.0;
+    s.max_density          = 4.0;
+    s.layers.clear();
+    for (const sm::LayerTargets& t : sheet.layers) {
+        Layer l;
+        l.name        = t.name;
+        l.sensitivity = luma_or_primary(t.name);
+        l.populations.clear();
+        // Siedentopf: sigma_D^2 = 0.434 a D / A gives the mean developed
+        // grain area a at the first granularity target (default: RMS 10
+        // at net 1.0).
+        const double rms = t.granularity.empty() ? 10.0 : t.granularity.front().rms;
+        const double d_g = t.granularity.empty() ? 1.0 : t.granularity.front().density;
+        const double aperture_um2 = M_PI / 4.0 * sm::kGranularityApertureUm
+                                    * sm::kGranularityApertureUm;
+        const double a_dev = (rms / 1000.0) * (rms / 1000.0) * aperture_um2 / (kLog10E * d_g);
+        const double d_dev = std::sqrt(4.0 * a_dev / M_PI);
+        for (int p = 0; p < options.populations; ++p) {
+            Population pop;
+            // Largest first, each next 0.7 times as large; together a
+            // potential D-max of about 3.2.
+            pop.diameter_um        = d_dev * std::pow(0.7, p);
+            pop.diameter_log_sigma = 0.35;
+            const double ea        = M_PI / 4.0 * pop.diameter_um * pop.diameter_um
+                              * std::exp(pop.diameter_log_sigma * pop.diameter_log_sigma);
+            pop.grains_per_um2     = 3.2 / options.populations / (kLog10E * ea);
+            pop.quantum_efficiency = 0.5;
+            pop.k_pair_per_s       = 1e7;
+            pop.k_join_per_s       = 1e6;
+            pop.k_loss_per_s       = 10.0;
+            double x[4];
+            get_population(pop, x);
+            set_population(pop, x);
+            l.populations.push_back(pop);
+        }
+        s.layers.push_back(l);
+    }
+    if (Status st = s.validate(); !st)
+        return st;
+    out = s;
+    return {};
+}
+
+Status measure(const Stock& stock, const sm::Datasheet& sheet, const ExpectedCurveOptions& curve,
+               sm::DatasheetFigures& figures, std::vector<sm::Comparison>& comparisons)
+{
+    DevelopModels models(stock, curve);
+    sm::FigureOptions fo;
+    fo.curve = curve;
+    if (Status s = sm::measure_datasheet_figures(stock, sheet, models, fo, figures); !s)
+        return s;
+    comparisons = sm::compare_figures(sheet, figures);
+    return {};
+}
+
+Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResult& out)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    if (options.populations < 1 || options.populations > 4)
+        return Status::errorf("populations = ", options.populations, ": must be in [1, 4]");
+    if (options.starts < 1 || options.starts > 16)
+        return Status::errorf("starts = ", options.starts, ": must be in [1, 16]");
+    if (options.rounds < 1 || options.rounds > 8)
+        return Status::errorf("rounds = ", options.rounds, ": must be in [1, 8]");
+    if (options.population_evals < 1 || options.rate_evals < 1)
+        return Status::errorf("evaluation budgets must be >= 1");
+    Stock stock;
+    if (options.start) {
+        stock = *options.start;
+        if (Status s = stock.validate(); !s)
+            return s;
+    } else if (Status s = initial_stock(sheet, options, stock); !s) {
+        return s;
+    }
+    out = FitResult();
+    Search search(sheet, options, stock, out.evaluations);
+    const bool rates = options.fit_rates && sheet.has_reciprocity;
+    for (int round = 0; round < options.rounds; ++round) {
+        for (size_t i = 0; i < sheet.layers.size(); ++i)
+            if (Status s = search.populations(i, round); !s)
+                return s;
+        if (Status s = search.base(); !s)
+            return s;
+        if (rates && round + 1 < options.rounds)
+            if (Status s = search.rates(round); !s)
+                return s;
+    }
+    if (options.progress)
+        options.progress("measuring the result at full precision ...");
+    if (Status s = measure(stock, sheet, options.final_curve, out.figures, out.comparisons); !s)
+        return s;
+    out.stock   = stock;
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return {};
+}
+
+std::string comparison_table(const std::vector<sm::Comparison>& comparisons)
+{
+    std::ostringstream o;
+    o << "| figure | target | achieved | error bound | miss | tolerance | |\n"
+         "| --- | --- | --- | --- | --- | --- | --- |\n";
+    for (const sm::Comparison& c : comparisons) {
+        const bool rel = c.unit == "relative";
+        o << "| " << c.figure << " | " << format(c.target) << " | " << format(c.achieved) << " | "
+          << format(c.error, 2) << " | "
+          << (rel ? format(100.0 * c.miss, 3) + "%" : format(c.miss, 3) + " " + c.unit) << " | "
+          << (rel ? format(100.0 * c.tolerance, 3) + "%" : format(c.tolerance, 3) + " " + c.unit)
+          << " | " << (c.met() ? "met" : "**missed**") << " |\n";
+    }
+    return o.str();
+}
+
+}  // namespace filmgrain::fit
+
+namespace filmgrain::fit {
+
+bool RenderCheckRow::agrees() const
+{
+    return std::fabs(rendered - analytic) <= 3.0 * rendered_se + analytic_error;
+}
+
+Status render_check(const Stock& stock, const sm::Datasheet& sheet,
+                    const sm::DatasheetFigures& figures, uint64_t seed, int nthreads,
+                    const std::function<void(const std::string&)>& progress,
+                    std::vector<RenderCheckRow>& out)
+{
+    out.clear();
+    sm::MeasureSettings ms;
+    ms.engine   = Engine::exact;
+    ms.nthreads = nthreads;
+    const bool iso5800    = sheet.speed_standard == "ISO 5800";
+    const double crit_net = iso5800 ? sm::kIso5800SpeedNetDensity : sm::kIso6SpeedNetDensity;
+    uint64_t patch        = 0;
+    const auto expose = [&](double log10_h, double shutter_s, double side_um, double pitch_um,
+                            sm::PatchReading& r, std::vector<std::vector<double>>* t) {
+        sm::PatchSpec p;
+        p.exposure_lxs = std::isfinite(log10_h) ? std::pow(10.0, log10_h) : 0.0;
+        p.shutter_s    = shutter_s;
+        p.side_um      = side_um;
+        p.pitch_um     = pitch_um;
+        p.seed         = sm::patch_seed(seed, patch++);
+        p.blocks       = 8;
+        return sm::expose_patch(stock, p, ms, r, t);
+    };
+    const auto say = [&](const std::string& s) {
+        if (progress)
+            progress(s);
+    };
+    for (size_t i = 0; i < sheet.layers.size(); ++i) {
+        const sm::LayerTargets& t         = sheet.layers[i];
+        const sm::DatasheetFigures::Layer& f = figures.layers[i];
+        size_t l = 0;
+        while (stock.layers[l].name != t.name)
+            ++l;
+        // D-min: the unexposed patch.
+        sm::PatchReading fog;
+        if (Status s = expose(-INFINITY, sm::kDatasheetShutterS, 1000.0, 8.0, fog, nullptr); !s)
+            return s;
+        const sm::LayerReading& fr = fog.layers[l];
+        out.push_back({ t.name + " D-min", f.d_min.value, f.d_min.error, fr.density, fr.density_se });
+        say("  render check: " + out.back().figure);
+        // The speed point: net density crit_net at H_m.
+        sm::PatchReading sp;
+        if (Status s = expose(f.speed_log10_h.value, sm::kDatasheetShutterS, 1000.0, 8.0, sp, nullptr); !s)
+            return s;
+        const double se_net = std::hypot(sp.layers[l].density_se, fr.density_se);
+        out.push_back({ t.name + " net density at the speed point", crit_net, f.d_min.error,
+                        sp.layers[l].density - fr.density, se_net });
+        say("  render check: " + out.back().figure);
+        if (t.slope) {
+            sm::PatchReading a, b;
+            if (Status s = expose(t.slope_log10_h_lo, sm::kDatasheetShutterS, 600.0, 8.0, a, nullptr); !s)
+                return s;
+            if (Status s = expose(t.slope_log10_h_hi, sm::kDatasheetShutterS, 600.0, 8.0, b, nullptr); !s)
+                return s;
+            const double span = t.slope_log10_h_hi - t.slope_log10_h_lo;
+            out.push_back({ t.name + " slope", f.slope.value, f.slope.error,
+                            (b.layers[l].density - a.layers[l].density) / span,
+                            std::hypot(a.layers[l].density_se, b.layers[l].density_se) / span });
+            say("  render check: " + out.back().figure);
+        }
+        // Granularity: the exposure at which the analytic curve reaches
+        // the target density (the curve at the final precision).
+        if (!t.granularity.empty()) {
+            std::vector<ExpectedCurve> curves;
+            SceneSettings scene;
+            scene.shutter_s = sm::kDatasheetShutterS;
+            if (Status s = expected_curves(stock, scene, ExpectedCurveOptions(), curves); !s)
+                return s;
+            const ExpectedCurve& c = curves[l];
+            const double sens      = stock.layers[l].sensitivity[0] + stock.layers[l].sensitivity[1]
+                                + stock.layers[l].sensitivity[2];
+            for (size_t g = 0; g < t.granularity.size(); ++g) {
+                const sm::GranularityTarget& gt = t.granularity[g];
+                const double d = gt.net ? c.min_density() + gt.density : gt.density;
+                const double x = sm::log10_exposure_at_density(c, sens, d);
+                sm::PatchReading r;
+                std::vector<std::vector<double>> tr;
+                if (Status s = expose(x, sm::kDatasheetShutterS, 1200.0, 2.0, r, &tr); !s)
+                    return s;
+                const sm::ApertureTemplate ap
+                    = sm::make_circular_aperture(sm::kGranularityApertureUm, r.pitch_um);
+                const sm::GranularityReading gr
+                    = sm::read_granularity(tr[l], r.side_px, ap, 12, stock.base_density, 4);
+                out.push_back({ t.name + " RMS at " + (gt.net ? "net " : "gross ")
+                                    + format(gt.density),
+                                f.granularity[g].value, f.granularity[g].error,
+                                1000.0 * gr.sigma_density, 1000.0 * gr.sigma_density_se });
+                say("  render check: " + out.back().figure);
+            }
+        }
+        // Reciprocity: at each time, the analytic shift's exposure must
+        // give the speed-point density again.
+        for (size_t k = 0; k < figures.reciprocity.size(); ++k) {
+            const double time_s = figures.reciprocity[k].first;
+            const double stops  = figures.reciprocity_layer_stops[k][l];
+            sm::PatchReading r;
+            if (Status s = expose(f.speed_log10_h.value + stops / kStopsPerDecade, time_s, 1000.0,
+                                  8.0, r, nullptr);
+                !s)
+                return s;
+            out.push_back({ t.name + " net density at the speed point, " + format(time_s)
+                                + " s, +" + format(stops, 3) + " stops",
+                            crit_net, f.d_min.error, r.layers[l].density - fr.density,
+                            std::hypot(r.layers[l].density_se, fr.density_se) });
+            say("  render check: " + out.back().figure);
+        }
+    }
+    return {};
+}
+
+}  // namespace filmgrain::fit

@@ -1,0 +1,144 @@
+// filmgrain-fit: a stock fitted to a datasheet's published figures (issue
+// 10). The search measures every candidate analytically, the datasheet
+// way (tools/sensitometry/datasheet.h: the one implementation of each
+// figure), and adjusts, per layer, the grain populations (grains_per_um2,
+// diameter_um, diameter_log_sigma, quantum_efficiency) and, for the whole
+// stock, the latent-image rates (k_pair, k_join, k_loss of MODEL.md 3: the
+// reciprocity table) and the base density (D-min).
+//
+// The search alternates two stages, each a derivative-free bounded search
+// (NLopt's Sbplx, Rowan's subplex: deterministic):
+//  A. populations, per layer, with the rates fixed: speed, slope and
+//     granularity at 1/100 s. The P(develop | N) table depends only on the
+//     rates, the shutter and the development (MODEL.md 3-4), so it is
+//     built once and every candidate costs a few milliseconds.
+//  B. rates, with the populations fixed: the reciprocity figures (a table
+//     per tabulated time and candidate, at a coarser Monte Carlo error).
+// Each objective is the sum of squared misses in units of the issue's
+// tolerance (speed 1/3 stop, slope 0.05, granularity 10%, reciprocity 1/3
+// stop, 1/6 inside none_between), so 1 is "at tolerance" for one figure.
+// The result is measured again at the expected curve's full precision.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "datasheet.h"
+#include "filmgrain/expected_curve.h"
+#include "filmgrain/status.h"
+#include "filmgrain/stock.h"
+
+namespace filmgrain::fit {
+
+struct FitOptions {
+    /// Chooses the multi-start points (start 0 is the physical guess;
+    /// later starts are jittered around it). The fit is deterministic for
+    /// a seed, whatever the threads.
+    uint64_t seed = 1;
+    /// Grain populations per layer. [1, 4].
+    int populations = 2;
+    /// Starts of the population search per layer and round. [1, 16].
+    int starts = 2;
+    /// Objective evaluations per start of the population search.
+    int population_evals = 500;
+    /// Objective evaluations of the rate search per round (each builds a
+    /// table per reciprocity time).
+    int rate_evals = 60;
+    /// Rounds of (populations, rates). [1, 8]. The last round ends with the
+    /// populations.
+    int rounds = 2;
+    /// Fit the rates (when the datasheet has a reciprocity table).
+    bool fit_rates = true;
+    /// Tables during the search (coarser: faster) and for the final figures.
+    ExpectedCurveOptions search_curve = [] {
+        ExpectedCurveOptions o;
+        o.target_standard_error = 5e-3;
+        o.max_photons           = 1024;
+        return o;
+    }();
+    /// Tables of the rate search: finer than search_curve, since the
+    /// reciprocity tolerance (1/6 stop) is tight against the tables' noise.
+    ExpectedCurveOptions rate_curve = [] {
+        ExpectedCurveOptions o;
+        o.target_standard_error = 3e-3;
+        o.max_photons           = 1024;
+        return o;
+    }();
+    ExpectedCurveOptions final_curve;
+    /// Development and fog of the fitted stock (not searched: no figure of
+    /// the datasheets separates them from the grains): d = 1 - exp(-3),
+    /// fog probability 1 - exp(-360 / 20000) = 1.8%.
+    double development_time_s = 360.0;
+    double development_tau_s  = 120.0;
+    double fog_tau_s          = 20000.0;
+    /// A starting stock instead of the physical guess (its populations and
+    /// rates; its layers must be the datasheet's).
+    std::optional<Stock> start;
+    /// Progress lines (nullptr: silent).
+    std::function<void(const std::string&)> progress;
+};
+
+struct FitResult {
+    Stock stock;
+    sensitometry::DatasheetFigures figures;  ///< at final_curve precision
+    std::vector<sensitometry::Comparison> comparisons;
+    int evaluations   = 0;  ///< objective evaluations, both stages
+    double seconds    = 0.0;
+};
+
+/// The stock the search starts from: one layer per datasheet layer (Y:
+/// Rec. 709 luma; R, G, B: the primaries), populations sized from the
+/// granularity target (Siedentopf's law gives the developed grain area),
+/// MODEL.md 7's rates, exposure_at_grey_lxs = 10 / S (a normally exposed
+/// grey card).
+Status initial_stock(const sensitometry::Datasheet& sheet, const FitOptions& options, Stock& out);
+
+/// Fits a stock to `sheet`. Errors: options out of range, a datasheet the
+/// stock format cannot represent (colour D-min differing per layer needs a
+/// per-layer base), no layers.
+Status fit_stock(const sensitometry::Datasheet& sheet, const FitOptions& options, FitResult& out);
+
+/// Measures `stock` against `sheet` at `curve` precision.
+Status measure(const Stock& stock, const sensitometry::Datasheet& sheet,
+               const ExpectedCurveOptions& curve, sensitometry::DatasheetFigures& figures,
+               std::vector<sensitometry::Comparison>& comparisons);
+
+/// A Markdown table of the comparisons (target, achieved, error, miss,
+/// tolerance, met).
+std::string comparison_table(const std::vector<sensitometry::Comparison>& comparisons);
+
+}  // namespace filmgrain::fit
+
+namespace filmgrain::fit {
+
+/// One figure of the render check: the analytic prediction beside what
+/// the render-based sensitometry (tools/sensitometry: expose_patch,
+/// read_granularity; the exact engine) measures on patches of the stock.
+struct RenderCheckRow {
+    std::string figure;
+    double analytic  = 0.0;
+    double analytic_error = 0.0;  ///< the analytic figure's stated bound
+    double rendered  = 0.0;
+    double rendered_se = 0.0;     ///< the measurement's standard error
+    /// Agreement: |rendered - analytic| <= 3 rendered_se + analytic_error
+    /// (3 standard errors: a two-sided 0.27% chance to fail by noise).
+    bool agrees() const;
+};
+
+/// Renders the patches that check `figures` (from measure()) on `stock`:
+/// for every datasheet layer the fog patch (D-min), the speed point (its
+/// net density against the criterion), the slope's two ends, each
+/// granularity density (1200 um square, 2 um pixels, the 48 um aperture
+/// on the pixel grid every 12 pixels, jackknife standard error) and the
+/// speed point at every reciprocity time (its net density at the exposure
+/// the analytic shift predicts). Deterministic for `seed`. Minutes with
+/// the exact engine at real emulsion scale.
+Status render_check(const Stock& stock, const sensitometry::Datasheet& sheet,
+                    const sensitometry::DatasheetFigures& figures, uint64_t seed, int nthreads,
+                    const std::function<void(const std::string&)>& progress,
+                    std::vector<RenderCheckRow>& out);
+
+}  // namespace filmgrain::fit

@@ -1,0 +1,344 @@
+// filmgrain-fit: fits a stock to a datasheet's published figures, or
+// measures a stock against one. Usage: see --help.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "fit.h"
+
+namespace sm = filmgrain::sensitometry;
+using filmgrain::Status;
+using filmgrain::Stock;
+
+namespace {
+
+void usage(std::ostream& os)
+{
+    const filmgrain::fit::FitOptions d;
+    os << "usage: filmgrain-fit DATASHEET.json -o STOCK.json [options]\n"
+          "       filmgrain-fit DATASHEET.json --measure STOCK|PRESET [--report DIR]\n"
+          "Fits a film stock's grain populations, latent-image rates and base density to\n"
+          "the published figures of a datasheet file (speed, slope, D-min, RMS\n"
+          "granularity, reciprocity; format: ../shared/datasheets/README.md), measuring\n"
+          "every candidate analytically the datasheet way (tools/sensitometry/datasheet.h).\n"
+          "  -o FILE            write the fitted stock (JSON, every key) to FILE\n"
+          "  --report DIR       write report.md (target vs achieved, every figure),\n"
+          "                     figures.json and curves.csv to DIR (created)\n"
+          "  --measure STOCK    measure a stock (file or built-in preset) instead of fitting\n"
+          "  --seed N           multi-start seed; the fit is deterministic for it (default "
+       << d.seed
+       << ")\n"
+          "  --populations N    grain populations per layer, 1 to 4 (default "
+       << d.populations
+       << ")\n"
+          "  --starts N         starts of the population search per layer and round (default "
+       << d.starts
+       << ")\n"
+          "  --population-evals N  evaluations per start (default "
+       << d.population_evals
+       << ")\n"
+          "  --rate-evals N     evaluations of the rate search per round (default "
+       << d.rate_evals
+       << ")\n"
+          "  --rounds N         rounds of (populations, rates), 1 to 8; one round fits no\n"
+          "                     rates (default "
+       << d.rounds
+       << ")\n"
+          "  --no-rates         keep the starting rates (MODEL.md 7's, or --start's)\n"
+          "  --start STOCK      start from this stock (file or preset) instead of the\n"
+          "                     physical guess\n"
+          "  --name NAME        name of the fitted stock (default: the datasheet's)\n"
+          "  --render-check     also render the patches that check every analytic figure\n"
+          "                     (exact engine; minutes) and compare (render_check.md)\n"
+          "  --threads N        threads of the chain tables (default 0: all)\n"
+          "  -q                 no progress lines\n"
+          "  --help             this text\n"
+          "Exit status: 0 when every figure is within the issue's tolerances, 3 when the\n"
+          "fit or measurement completed but some missed (the report says which), 1 on\n"
+          "errors, 2 on usage errors.\n";
+}
+
+std::string stamp(double seconds)
+{
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "[%6.1f s] ", seconds);
+    return buf;
+}
+
+/// curves.csv: each layer's expected density over log10 H at 1/100 s and
+/// at every reciprocity time.
+Status write_curves(const Stock& stock, const sm::Datasheet& sheet,
+                    const filmgrain::ExpectedCurveOptions& curve, const std::string& path)
+{
+    std::ofstream out(path);
+    out << "shutter_s,layer,log10_h_lxs,density\n";
+    std::vector<double> times = { sm::kDatasheetShutterS };
+    for (double t : sheet.reciprocity_times_s())
+        times.push_back(t);
+    for (double t : times) {
+        filmgrain::SceneSettings scene;
+        scene.shutter_s = t;
+        std::vector<filmgrain::ExpectedCurve> curves;
+        if (Status s = filmgrain::expected_curves(stock, scene, curve, curves); !s)
+            return s;
+        for (size_t l = 0; l < curves.size(); ++l) {
+            const double sens = stock.layers[l].sensitivity[0] + stock.layers[l].sensitivity[1]
+                                + stock.layers[l].sensitivity[2];
+            for (size_t k = 1; k < curves[l].points.size(); k += 4)
+                out << t << "," << curves[l].layer << ","
+                    << std::log10(curves[l].points[k].exposure_lxs / sens) << ","
+                    << curves[l].points[k].density << "\n";
+        }
+    }
+    return out ? Status() : Status::errorf("cannot write ", path);
+}
+
+nlohmann::json figures_json(const sm::DatasheetFigures& f,
+                            const std::vector<sm::Comparison>& comparisons)
+{
+    nlohmann::json j;
+    j["speed"] = { { "value", f.speed.value }, { "error", f.speed.error } };
+    j["speed_log10_h"] = { { "value", f.speed_log10_h.value }, { "error", f.speed_log10_h.error } };
+    for (const auto& l : f.layers) {
+        nlohmann::json jl = { { "name", l.name },
+                              { "d_min", { l.d_min.value, l.d_min.error } },
+                              { "slope", { l.slope.value, l.slope.error } },
+                              { "speed_log10_h", { l.speed_log10_h.value, l.speed_log10_h.error } } };
+        for (const auto& g : l.granularity)
+            jl["rms_granularity"].push_back({ g.value, g.error });
+        j["layers"].push_back(jl);
+    }
+    for (size_t k = 0; k < f.reciprocity.size(); ++k)
+        j["reciprocity"].push_back({ { "shutter_s", f.reciprocity[k].first },
+                                     { "extra_stops", f.reciprocity[k].second.value },
+                                     { "error", f.reciprocity[k].second.error },
+                                     { "per_layer", f.reciprocity_layer_stops[k] } });
+    for (const auto& c : comparisons)
+        j["comparisons"].push_back({ { "figure", c.figure },
+                                     { "target", c.target },
+                                     { "achieved", c.achieved },
+                                     { "error", c.error },
+                                     { "miss", c.miss },
+                                     { "tolerance", c.tolerance },
+                                     { "unit", c.unit },
+                                     { "met", c.met() } });
+    return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    filmgrain::fit::FitOptions opt;
+    std::string sheet_path, out_path, report_dir, measure_path, start_path, name;
+    bool quiet = false, check = false;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const auto next = [&](const char* what) -> std::string {
+            if (i + 1 >= argc) {
+                std::cerr << "filmgrain-fit: " << a << " needs " << what << "\n";
+                std::exit(2);
+            }
+            return argv[++i];
+        };
+        const auto integer = [&](const char* what, long lo, long hi) -> long {
+            const std::string v = next(what);
+            char* end           = nullptr;
+            const long x        = std::strtol(v.c_str(), &end, 10);
+            if (end == v.c_str() || *end || x < lo || x > hi) {
+                std::cerr << "filmgrain-fit: " << a << " " << v << ": must be an integer in ["
+                          << lo << ", " << hi << "]\n";
+                std::exit(2);
+            }
+            return x;
+        };
+        if (a == "--help" || a == "-h") {
+            usage(std::cout);
+            return 0;
+        } else if (a == "-o") {
+            out_path = next("a file");
+        } else if (a == "--report") {
+            report_dir = next("a directory");
+        } else if (a == "--measure") {
+            measure_path = next("a stock");
+        } else if (a == "--seed") {
+            const std::string v = next("a number");
+            char* end           = nullptr;
+            opt.seed            = std::strtoull(v.c_str(), &end, 10);
+            if (end == v.c_str() || *end) {
+                std::cerr << "filmgrain-fit: --seed " << v << ": not an unsigned integer\n";
+                return 2;
+            }
+        } else if (a == "--populations") {
+            opt.populations = static_cast<int>(integer("N", 1, 4));
+        } else if (a == "--starts") {
+            opt.starts = static_cast<int>(integer("N", 1, 16));
+        } else if (a == "--population-evals") {
+            opt.population_evals = static_cast<int>(integer("N", 1, 1000000));
+        } else if (a == "--rate-evals") {
+            opt.rate_evals = static_cast<int>(integer("N", 1, 100000));
+        } else if (a == "--rounds") {
+            opt.rounds = static_cast<int>(integer("N", 1, 8));
+        } else if (a == "--render-check") {
+            check = true;
+        } else if (a == "--no-rates") {
+            opt.fit_rates = false;
+        } else if (a == "--start") {
+            start_path = next("a stock");
+        } else if (a == "--name") {
+            name = next("a name");
+        } else if (a == "--threads") {
+            const int t = static_cast<int>(integer("N", 0, 1024));
+            opt.search_curve.nthreads = opt.final_curve.nthreads = t;
+        } else if (a == "-q") {
+            quiet = true;
+        } else if (!a.empty() && a[0] == '-') {
+            std::cerr << "filmgrain-fit: unknown option " << a << " (see --help)\n";
+            return 2;
+        } else if (sheet_path.empty()) {
+            sheet_path = a;
+        } else {
+            std::cerr << "filmgrain-fit: more than one datasheet (" << sheet_path << ", " << a
+                      << ")\n";
+            return 2;
+        }
+    }
+    if (sheet_path.empty() || (out_path.empty() && measure_path.empty())) {
+        usage(std::cerr);
+        return 2;
+    }
+    sm::Datasheet sheet;
+    if (Status s = sm::load_datasheet(sheet_path, sheet); !s) {
+        std::cerr << "filmgrain-fit: " << s.message() << "\n";
+        return 1;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto elapsed = [&] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+    if (!quiet)
+        opt.progress = [&](const std::string& line) {
+            std::cerr << stamp(elapsed()) << line << std::endl;
+        };
+
+    Stock stock;
+    sm::DatasheetFigures figures;
+    std::vector<sm::Comparison> comparisons;
+    double fit_seconds = 0.0;
+    int evaluations    = 0;
+    if (!measure_path.empty()) {
+        if (Status s = filmgrain::load_stock(measure_path, stock); !s) {
+            std::cerr << "filmgrain-fit: " << s.message() << "\n";
+            return 1;
+        }
+        if (Status s = filmgrain::fit::measure(stock, sheet, opt.final_curve, figures, comparisons);
+            !s) {
+            std::cerr << "filmgrain-fit: " << s.message() << "\n";
+            return 1;
+        }
+    } else {
+        if (!start_path.empty()) {
+            Stock start;
+            if (Status s = filmgrain::load_stock(start_path, start); !s) {
+                std::cerr << "filmgrain-fit: " << s.message() << "\n";
+                return 1;
+            }
+            opt.start = start;
+        }
+        if (opt.progress)
+            opt.progress("fitting " + sheet.name + " (" + sheet_path + "), seed "
+                         + std::to_string(opt.seed));
+        filmgrain::fit::FitResult r;
+        if (Status s = filmgrain::fit::fit_stock(sheet, opt, r); !s) {
+            std::cerr << "filmgrain-fit: " << s.message() << "\n";
+            return 1;
+        }
+        stock       = r.stock;
+        figures     = r.figures;
+        comparisons = r.comparisons;
+        fit_seconds = r.seconds;
+        evaluations = r.evaluations;
+        if (!name.empty())
+            stock.name = name;
+        std::ofstream out(out_path);
+        out << filmgrain::stock_to_json(stock, 2) << "\n";
+        if (!out) {
+            std::cerr << "filmgrain-fit: cannot write " << out_path << "\n";
+            return 1;
+        }
+    }
+    const std::string table = filmgrain::fit::comparison_table(comparisons);
+    int missed              = 0;
+    for (const auto& c : comparisons)
+        missed += c.met() ? 0 : 1;
+    std::cout << table;
+    std::cout << (missed ? std::to_string(missed) + " of " + std::to_string(comparisons.size())
+                               + " figures missed their tolerance"
+                         : "every figure within tolerance (" + std::to_string(comparisons.size())
+                               + ")")
+              << "\n";
+    if (!report_dir.empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(report_dir, ec);
+        std::ofstream md(report_dir + "/report.md");
+        md << "# " << stock.name << " against the datasheet " << sheet.name << "\n\n"
+           << "Datasheet: `" << sheet_path << "`. Figures measured analytically from the model's "
+              "expected curves and Boolean-model aperture variance "
+              "(tools/sensitometry/datasheet.h says how each is defined); the error bound is "
+              "the expected curve's stated density error carried into each figure.\n\n";
+        if (measure_path.empty())
+            md << "Fitted in " << fit_seconds << " s (" << evaluations
+               << " objective evaluations), seed " << opt.seed << ", " << opt.populations
+               << " populations per layer.\n\n";
+        md << table << "\n"
+           << (missed ? "**" + std::to_string(missed) + " figures missed** (above).\n"
+                      : "Every figure is within the issue's tolerance.\n");
+        nlohmann::json j = figures_json(figures, comparisons);
+        j["stock"]       = nlohmann::json::parse(filmgrain::stock_to_json(stock));
+        j["fit_seconds"] = fit_seconds;
+        std::ofstream(report_dir + "/figures.json") << j.dump(2) << "\n";
+        if (Status s = write_curves(stock, sheet, opt.final_curve, report_dir + "/curves.csv"); !s)
+            std::cerr << "filmgrain-fit: " << s.message() << "\n";
+    }
+    if (check) {
+        std::vector<filmgrain::fit::RenderCheckRow> rows;
+        if (Status s = filmgrain::fit::render_check(stock, sheet, figures, opt.seed,
+                                                    opt.final_curve.nthreads, opt.progress, rows);
+            !s) {
+            std::cerr << "filmgrain-fit: render check: " << s.message() << "\n";
+            return 1;
+        }
+        std::ostringstream md;
+        md << "| figure | analytic | bound | rendered (exact engine) | standard error | z | |\n"
+              "| --- | --- | --- | --- | --- | --- | --- |\n";
+        int disagree = 0;
+        for (const auto& r : rows) {
+            disagree += r.agrees() ? 0 : 1;
+            md << "| " << r.figure << " | " << r.analytic << " | " << r.analytic_error << " | "
+               << r.rendered << " | " << r.rendered_se << " | "
+               << (r.rendered_se > 0.0 ? (r.rendered - r.analytic) / r.rendered_se : 0.0) << " | "
+               << (r.agrees() ? "agrees" : "**disagrees**") << " |\n";
+        }
+        md << (disagree ? std::to_string(disagree) + " rows disagree (beyond 3 standard errors "
+                                                     "plus the analytic bound)\n"
+                        : "every row agrees within 3 standard errors plus the analytic bound\n");
+        std::cout << "\nrender check:\n" << md.str();
+        if (!report_dir.empty())
+            std::ofstream(report_dir + "/render_check.md")
+                << "# Render check: " << stock.name << "\n\nThe analytic figures beside "
+                   "patches rendered with the exact engine and read by tools/sensitometry "
+                   "(expose_patch, read_granularity), seed " << opt.seed << ". Agreement: "
+                   "|rendered - analytic| <= 3 standard errors + the analytic bound.\n\n"
+                << md.str();
+        if (disagree)
+            return 1;
+    }
+    return missed ? 3 : 0;
+}

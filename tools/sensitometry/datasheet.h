@@ -1,0 +1,160 @@
+// filmgrain sensitometry: the figures a film maker publishes (speed,
+// slope, D-min, diffuse RMS granularity, reciprocity), read from a
+// datasheet file (../shared/datasheets/README.md gives the format) and
+// measured on a stock the datasheet way, analytically: from the model's
+// expected characteristic curve (core: expected_curves' pieces,
+// core/src/expected_curve_model.h) and the Boolean model's aperture
+// variance (boolean_model.h). No rendering; filmgrain-fit searches with
+// these and tests/stocks holds the built-in stocks to them.
+//
+// Conventions (each a documented choice where the datasheet is silent):
+// - Exposures are neutral, lux-seconds: a layer receives sum(sensitivity)
+//   times H (as predict_layer). Speed, slope and granularity are read at
+//   the datasheet's 1/100 s (kDatasheetShutterS); reciprocity at each
+//   tabulated time.
+// - Speed: ISO 6 (black and white) or ISO 5800 (colour), analysis.h.
+// - Slope: the two-point slope (D(b) - D(a)) / (b - a) over the stated
+//   absolute log10 H range [a, b]: the datasheet figures are two-point fits.
+// - D-min: the layer's density at zero exposure (base plus fog).
+// - Granularity: 1000 sigma_D, sigma_D the standard deviation of
+//   -log10 of the mean transmittance through an ideal 48 um circular
+//   aperture on a uniform patch exposed to the stated net (above D-min) or
+//   gross density; sigma_D = log10(e) sigma_T / T (first order in
+//   sigma_T / T; the second-order term is below (sigma_T / T)^2 relative,
+//   under 0.3% for RMS 20).
+// - Reciprocity: the extra exposure, in stops, that gives the layer's
+//   speed-point density (0.10 above base + fog for ISO 6, 0.15 for ISO
+//   5800) at time t, relative to reference_s: log2(H(t) / H(t0)). The
+//   datasheet's correction keeps the effective speed; this measures it
+//   where speed is defined. Per layer; a colour stock's figure is the
+//   largest |shift| over its layers.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "filmgrain/expected_curve.h"
+#include "filmgrain/status.h"
+#include "filmgrain/stock.h"
+
+namespace filmgrain {
+class DevelopModels;
+}
+
+namespace filmgrain::sensitometry {
+
+/// Shutter of the datasheet's characteristic curve, seconds.
+inline constexpr double kDatasheetShutterS = 1e-2;
+/// Diameter of the granularity aperture, micrometres.
+inline constexpr double kGranularityApertureUm = 48.0;
+
+/// One RMS granularity target.
+struct GranularityTarget {
+    double density = 0.0;  ///< the density it is read at
+    bool net       = true; ///< above D-min (else gross)
+    double rms     = 0.0;  ///< 1000 sigma_D
+};
+
+/// The targets of one layer (absent figures are empty).
+struct LayerTargets {
+    std::string name;
+    std::optional<double> d_min;
+    std::optional<double> slope;
+    double slope_log10_h_lo = 0.0, slope_log10_h_hi = 0.0;
+    std::vector<GranularityTarget> granularity;
+};
+
+/// A datasheet file.
+struct Datasheet {
+    std::string name;
+    std::string kind;  ///< "bw-negative" or "colour-negative"
+    std::optional<double> speed;
+    std::string speed_standard;  ///< "ISO 6" or "ISO 5800"
+    std::vector<LayerTargets> layers;
+    bool has_reciprocity = false;
+    double reciprocity_reference_s = kDatasheetShutterS;
+    std::optional<std::pair<double, double>> none_between;
+    /// (time_s, extra stops), increasing time.
+    std::vector<std::pair<double, double>> extra_stops;
+    /// The times reciprocity is measured at: every tabulated time and the
+    /// ends of none_between (increasing, without reference_s).
+    std::vector<double> reciprocity_times_s() const;
+};
+
+/// Parses a datasheet (unknown keys and wrong types are errors naming them).
+Status parse_datasheet_json(const std::string& text, const std::string& origin, Datasheet& out);
+Status load_datasheet(const std::string& path, Datasheet& out);
+
+/// One measured figure: its value and a bound on its error (analytic: from
+/// the expected curve's density_error; rendered: a standard error).
+struct Figure {
+    double value = 0.0;
+    double error = 0.0;
+};
+
+/// A stock's figures, in the datasheet's order (one per target it gives).
+struct DatasheetFigures {
+    Figure speed;             ///< ISO speed (ISO 6 or ISO 5800 as the datasheet)
+    Figure speed_log10_h;     ///< log10 H_m (ISO 5800: H_M), neutral lux-seconds
+    struct Layer {
+        std::string name;
+        Figure d_min;
+        Figure slope;
+        Figure speed_log10_h;  ///< this layer's speed point
+        std::vector<Figure> granularity;  ///< one per target, 1000 sigma_D
+    };
+    std::vector<Layer> layers;  ///< the datasheet's layers (matched by name)
+    /// (time_s, extra stops) at reciprocity_times_s(); per layer in
+    /// layer_stops, the figure is the layer shift of largest magnitude.
+    std::vector<std::pair<double, Figure>> reciprocity;
+    std::vector<std::vector<double>> reciprocity_layer_stops;
+};
+
+/// What to measure.
+struct FigureOptions {
+    ExpectedCurveOptions curve;
+    bool reciprocity  = true;
+    bool granularity  = true;
+};
+
+/// Measures `stock` against `sheet`'s targets analytically. `models` must
+/// be made for this stock's development (DevelopModels(stock, ...)); its
+/// tables are reused across calls with the same rates and shutters.
+/// Errors: a datasheet layer the stock does not have; a target density the
+/// curve never reaches.
+Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
+                                 DevelopModels& models, const FigureOptions& options,
+                                 DatasheetFigures& out);
+
+/// log10 of the neutral exposure at which `curve` (of a layer with
+/// sensitivity sum `sensitivity_sum`) reaches `density`, or NaN.
+double log10_exposure_at_density(const ExpectedCurve& curve, double sensitivity_sum,
+                                 double density);
+
+/// The issue's tolerances (issue 10): speed 1/3 stop, slope 0.05, D-min
+/// 0.03, granularity 10%, reciprocity 1/3 stop (1/6 inside none_between).
+struct Tolerances {
+    double speed_stops       = 1.0 / 3.0;
+    double slope             = 0.05;
+    double d_min             = 0.03;
+    double granularity_rel   = 0.10;
+    double reciprocity_stops = 1.0 / 3.0;
+    double none_between_stops = 1.0 / 6.0;
+};
+
+/// One line of a comparison: a target, what was measured and whether it
+/// is within tolerance.
+struct Comparison {
+    std::string figure;  ///< e.g. "speed", "Y slope", "Y rms@net1.0", "reciprocity 10 s"
+    double target = 0.0, achieved = 0.0, error = 0.0;
+    double miss = 0.0;       ///< |achieved - target| in the tolerance's unit
+    double tolerance = 0.0;  ///< in the same unit
+    std::string unit;        ///< "stops", "density", "relative", ...
+    bool met() const { return miss <= tolerance; }
+};
+std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetFigures& fig,
+                                        const Tolerances& tol = Tolerances());
+
+}  // namespace filmgrain::sensitometry
