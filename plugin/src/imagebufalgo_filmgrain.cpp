@@ -25,6 +25,23 @@ FilmgrainOptions::FilmgrainOptions()
     }
 }
 
+OIIO::ROI film_frame_window(const OIIO::ImageSpec& spec)
+{
+    if (spec.full_width > 0 && spec.full_height > 0)
+        return OIIO::ROI(spec.full_x, spec.full_x + spec.full_width, spec.full_y,
+                         spec.full_y + spec.full_height);
+    return OIIO::ROI(spec.x, spec.x + spec.width, spec.y, spec.y + spec.height);
+}
+
+Status frame_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, ScanGeometry& out)
+{
+    const OIIO::ROI frame = film_frame_window(spec);
+    RenderSettings settings;
+    settings.scan_width  = opts.scan_width;
+    settings.scan_height = opts.scan_height;
+    return scan_geometry(opts.scene, frame.width(), frame.height(), settings, out);
+}
+
 bool has_overscan(const OIIO::ImageSpec& spec)
 {
     return spec.full_width > 0 && spec.full_height > 0
@@ -80,15 +97,10 @@ struct FilmMapping {
 bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMapping& m,
               std::string& error)
 {
-    const bool has_full = spec.full_width > 0 && spec.full_height > 0;
-    const int64_t fx = has_full ? spec.full_x : spec.x, fy = has_full ? spec.full_y : spec.y;
-    const int64_t fw = has_full ? spec.full_width : spec.width;
-    const int64_t fh = has_full ? spec.full_height : spec.height;
-    RenderSettings scan_settings;
-    scan_settings.scan_width  = opts.scan_width;
-    scan_settings.scan_height = opts.scan_height;
+    const OIIO::ROI frame = film_frame_window(spec);
+    const int64_t fx = frame.xbegin, fy = frame.ybegin, fw = frame.width(), fh = frame.height();
     ScanGeometry display;
-    if (Status s = scan_geometry(opts.scene, fw, fh, scan_settings, display); !s) {
+    if (Status s = frame_scan(spec, opts, display); !s) {
         error = s.message();
         return false;
     }

@@ -279,17 +279,15 @@ bool roi_read_window(const FilmgrainOptions& opts, const FilmgrainCommand& cmd,
     // is read whole.
     if (has_overscan(spec))
         return false;
-    const bool full_w = spec.full_width > 0, full_h = spec.full_height > 0;
-    const int64_t fx = full_w ? spec.full_x : spec.x, fy = full_h ? spec.full_y : spec.y;
-    const int64_t fw = full_w ? spec.full_width : spec.width;
-    const int64_t fh = full_h ? spec.full_height : spec.height;
+    const OIIO::ROI frame = film_frame_window(spec);
+    const int64_t fx = frame.xbegin, fy = frame.ybegin, fw = frame.width(), fh = frame.height();
     RenderSettings settings;
     settings.scan_width  = opts.scan_width;
     settings.scan_height = opts.scan_height;
     settings.roi         = Roi { cmd.roi_x, cmd.roi_y, cmd.roi_x + cmd.roi_width,
                                  cmd.roi_y + cmd.roi_height };
     ScanGeometry scan;
-    if (!scan_geometry(opts.scene, fw, fh, settings, scan))
+    if (!frame_scan(spec, opts, scan))
         return false;
     const Roi& r = settings.roi;
     if (r.x_begin < 0 || r.y_begin < 0 || r.x_end > scan.width || r.y_end > scan.height
@@ -433,15 +431,12 @@ constexpr int64_t kMaxOutputValues = int64_t(1) << 31;
 Status check_output_size(const FilmgrainOptions& opts, const OIIO::ImageSpec& input,
                          const FilmgrainCommand& cmd)
 {
-    RenderSettings settings;
-    settings.scan_width  = opts.scan_width;
-    settings.scan_height = opts.scan_height;
     // The scan covers the display window (else the data window); with
     // overscan the output is the data window's scan, larger.
-    const int64_t frame_w = input.full_width > 0 ? input.full_width : input.width;
-    const int64_t frame_h = input.full_height > 0 ? input.full_height : input.height;
+    const OIIO::ROI frame = film_frame_window(input);
+    const int64_t frame_w = frame.width(), frame_h = frame.height();
     ScanGeometry scan;
-    if (Status s = scan_geometry(opts.scene, frame_w, frame_h, settings, scan); !s)
+    if (Status s = frame_scan(input, opts, scan); !s)
         return s;
     const double grow_x = has_overscan(input) ? double(input.width) / double(frame_w) : 1.0;
     const double grow_y = has_overscan(input) ? double(input.height) / double(frame_h) : 1.0;
@@ -791,13 +786,7 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
         return Status::error(msg);
     }
 
-    RenderSettings geometry_settings;
-    geometry_settings.scan_width  = opts.scan_width;
-    geometry_settings.scan_height = opts.scan_height;
-    const int64_t frame_w = header.full_width > 0 ? header.full_width : header.width;
-    const int64_t frame_h = header.full_height > 0 ? header.full_height : header.height;
-    if (Status s = scan_geometry(opts.scene, frame_w, frame_h, geometry_settings, report.scan);
-        !s)
+    if (Status s = frame_scan(header, opts, report.scan); !s)
         return s;
     const OIIO::ROI data = dst.roi();
     report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };

@@ -289,10 +289,9 @@ Status apply_regrain(const OutputRequest& req, const FilmgrainOptions& opts,
     // The scan must be the input frame's grid: each scan pixel's mean is
     // the input pixel under it.
     const OIIO::ImageSpec& is = input.spec();
-    const int64_t frame_w = is.full_width > 0 ? is.full_width : is.width;
-    const int64_t frame_h = is.full_height > 0 ? is.full_height : is.height;
-    const int64_t fx = is.full_width > 0 ? is.full_x : is.x;
-    const int64_t fy = is.full_height > 0 ? is.full_y : is.y;
+    const OIIO::ROI frame = film_frame_window(is);
+    const int64_t frame_w = frame.width(), frame_h = frame.height();
+    const int64_t fx = frame.xbegin, fy = frame.ybegin;
     const OIIO::ImageSpec& ds = density.spec();
     if (ds.full_width != frame_w || ds.full_height != frame_h)
         return Status::errorf("output=regrain needs the scan at the input's size (", frame_w,

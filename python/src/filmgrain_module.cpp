@@ -245,13 +245,7 @@ py::tuple render(py::array pixels, const std::string& modifiers,
             dst = std::move(result);
     }
 
-    RenderSettings geometry;
-    geometry.scan_width  = opts.scan_width;
-    geometry.scan_height = opts.scan_height;
-    const int64_t frame_width  = spec.full_width > 0 ? spec.full_width : spec.width;
-    const int64_t frame_height = spec.full_height > 0 ? spec.full_height : spec.height;
-    if (Status s = scan_geometry(opts.scene, frame_width, frame_height, geometry, report.scan);
-        !s)
+    if (Status s = frame_scan(spec, opts, report.scan); !s)
         throw Error(s.message());
     const OIIO::ROI data = dst.roi();
     report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };

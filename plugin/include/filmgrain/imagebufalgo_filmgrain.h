@@ -139,6 +139,14 @@ OIIO::ImageBuf filmgrain(const OIIO::ImageBuf& src, const FilmgrainOptions& opts
 
 }  // namespace IBA
 
+/// The window the film frame covers: `spec`'s display (full) window, or
+/// its data window when none is set (file coordinates).
+OIIO::ROI film_frame_window(const OIIO::ImageSpec& spec);
+
+/// The scan of that frame with `opts` (scan size and pitch; the overscan,
+/// if any, lies beyond it).
+Status frame_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, ScanGeometry& out);
+
 /// True when `spec`'s data window reaches beyond its display window
 /// (overscan: rendered as film too, see IBA::filmgrain).
 bool has_overscan(const OIIO::ImageSpec& spec);
