@@ -607,6 +607,9 @@ struct RenderContext {
     const CliArgs& args;
     const Console& con;
     FilmgrainOptions opts;  ///< scene.frame is set per frame
+    /// output=regrain's expected curves, built by the first frame.
+    std::shared_ptr<std::vector<ExpectedCurve>> regrain_curves
+        = std::make_shared<std::vector<ExpectedCurve>>();
 };
 
 /// Identifies what an output was made from, for --skip-existing: a SHA-1
@@ -809,8 +812,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     OIIO::ImageBuf transformed;
     OIIO::ImageBuf& result = cmd.output == OutputKind::density ? dst : transformed;
     OutputReport output_report;
-    if (Status s = apply_output(OutputRequest { cmd.output, a.colorconfig, a.ocolorspace }, opts,
-                                src, dst, result, output_report);
+    if (Status s = apply_output(
+            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves }, opts,
+            src, dst, result, output_report);
         !s)
         return s;
     for (const std::string& w : output_report.warnings)
@@ -860,7 +864,7 @@ int render(const CliArgs& a, const Console& con)
     if (Status s = plan_frames(a, jobs); !s)
         return con.fail(s);
 
-    RenderContext ctx { a, con, {} };
+    RenderContext ctx { a, con, {}, std::make_shared<std::vector<ExpectedCurve>>() };
     const FilmgrainCommand& cmd = a.filmgrain;
     if (Status s = load_stock(cmd.stock, ctx.opts.stock); !s)
         return con.fail(s);

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 namespace filmgrain::cli {
 
@@ -80,7 +81,9 @@ Status OutputFiles::reserve(const std::string& final_path)
     if (fd < 0)
         return cannot_create(final_path, errno);
     ::close(fd);
-    m_entries.push_back(Entry { final_path });
+    Entry entry;
+    entry.final_path = final_path;
+    m_entries.push_back(std::move(entry));
     return {};
 }
 

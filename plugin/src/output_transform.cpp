@@ -302,8 +302,14 @@ Status apply_regrain(const OutputRequest& req, const FilmgrainOptions& opts,
         return Status::errorf("output=regrain: the input has ", is.nchannels,
                               " channels: expected 1 or at least 3");
     std::vector<ExpectedCurve> curves;
-    if (Status s = expected_curves(stock, opts.scene, ExpectedCurveOptions(), curves); !s)
-        return Status::errorf("output=regrain: ", s.message());
+    if (req.curves_cache && !req.curves_cache->empty()) {
+        curves = *req.curves_cache;
+    } else {
+        if (Status s = expected_curves(stock, opts.scene, ExpectedCurveOptions(), curves); !s)
+            return Status::errorf("output=regrain: ", s.message());
+        if (req.curves_cache)
+            *req.curves_cache = curves;
+    }
     RegrainModel model;
     if (Status s = make_regrain_model(stock, std::move(curves), model); !s)
         return s;

@@ -34,6 +34,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -113,6 +114,11 @@ struct OutputRequest {
     std::string colorconfig;
     /// --ocolorspace (regrain only; empty: the config's scene_linear).
     std::string ocolorspace;
+    /// Regrain's expected curves, shared by the frames of one run: they
+    /// depend on the stock, the exposure and the shutter, never on the seed
+    /// or the frame, and take seconds to build. Null: built for this call
+    /// only; else filled by the first call and reused by the next.
+    std::shared_ptr<std::vector<ExpectedCurve>> curves_cache;
 };
 
 /// What apply_output did.

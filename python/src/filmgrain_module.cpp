@@ -232,9 +232,11 @@ py::tuple render(py::array pixels, const std::string& modifiers,
         Status s;
         {
             py::gil_scoped_release nogil;
-            s = cli::apply_output(cli::OutputRequest { cmd.output, colorconfig.value_or(""),
-                                                       ocolorspace.value_or("") },
-                                  opts, src, dst, result, output_report);
+            cli::OutputRequest request;  // one render: no curves to share
+            request.kind        = cmd.output;
+            request.colorconfig = colorconfig.value_or("");
+            request.ocolorspace = ocolorspace.value_or("");
+            s = cli::apply_output(request, opts, src, dst, result, output_report);
         }
         if (!s)
             throw Error(s.message());

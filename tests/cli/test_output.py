@@ -64,3 +64,17 @@ def test_output_errors(run, tmp_path):
     assert r.returncode == 1 and "nonesuch" in r.stderr, r.stderr
     r = run(plate, f"--filmgrain:{FAST}:output=print", "-o", tmp_path / "o.exr")
     assert r.returncode == 1 and "output=print" in r.stderr, r.stderr
+
+
+def test_regrain_sequence_reuses_its_curves_and_equals_single_frames(run, tmp_path):
+    """The expected curves are built once per run (they do not depend on the
+    frame); every frame still equals the same frame rendered alone."""
+    plate = write_image(tmp_path / "still.exr", np.full((24, 32, 3), 0.18, np.float32))
+    mods = f"--filmgrain:{FAST}:seed=3:output=regrain"
+    r = run(plate, "--frames", "1-2", mods, "-o", tmp_path / "rg.#.exr")
+    assert r.returncode == 0, r.stderr
+    for f in (1, 2):
+        r = run(plate, f"{mods}:frame={f}", "-o", tmp_path / f"alone{f}.exr")
+        assert r.returncode == 0, r.stderr
+        assert np.array_equal(layers(Exr(tmp_path / f"rg.{f:04d}.exr")),
+                              layers(Exr(tmp_path / f"alone{f}.exr")))
