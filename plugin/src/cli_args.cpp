@@ -15,6 +15,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "filmgrain/chart.h"
 #include "filmgrain/ocio.h"
 #include "filmgrain/version.h"
 #include "filmgrain/wedge.h"
@@ -84,6 +85,22 @@ std::string wedge_help()
     return out.str();
 }
 
+/// --chart's help, from the ChartSpec defaults.
+std::string chart_help()
+{
+    const ChartSpec c;
+    std::ostringstream out;
+    out << "Render the built-in look chart instead of INPUT: " << c.width_px << "x" << c.height_px
+        << " scene-linear RGB on a ground at " << format_stops(c.ground_stops)
+        << " stops around 0.18: a point light of radius " << c.point_radius_px << " px at "
+        << format_stops(c.point_stops) << " stops and a dimmer one at "
+        << format_stops(c.dim_point_stops) << " (halation), a sharp-edged rectangle at "
+        << format_stops(c.rect_stops) << " (adjacency effect) and the " << kChartPatches
+        << "-patch ColorChecker (colour), on a test strip " << c.strip_width_mm
+        << " mm wide (width_mm= overrides it)";
+    return out.str();
+}
+
 const std::vector<OptionSpec>& option_table()
 {
     static const std::vector<OptionSpec> table = {
@@ -91,6 +108,12 @@ const std::vector<OptionSpec>& option_table()
           [](CliArgs& a, const std::string&, const char*) {
               Status s = once(a.wedge, "--wedge");
               a.wedge  = true;
+              return s;
+          } },
+        { "--chart", nullptr, "", chart_help(),
+          [](CliArgs& a, const std::string&, const char*) {
+              Status s = once(a.chart, "--chart");
+              a.chart  = true;
               return s;
           } },
         { "--colorconfig", nullptr, "FILE",
@@ -380,13 +403,20 @@ bool wants_help(int argc, const char** argv)
 
 Status validate_render_args(const CliArgs& a)
 {
-    if (a.input.empty() && !a.wedge)
-        return Status::error("no INPUT image (or --wedge) given (see filmgrain --help)");
+    if (a.input.empty() && !a.wedge && !a.chart)
+        return Status::error("no INPUT image (or --wedge or --chart) given (see filmgrain --help)");
     if (!a.input.empty() && a.wedge)
         return Status::errorf("both INPUT '", a.input,
                               "' and --wedge given: render one or the other");
+    if (!a.input.empty() && a.chart)
+        return Status::errorf("both INPUT '", a.input,
+                              "' and --chart given: render one or the other");
+    if (a.wedge && a.chart)
+        return Status::error("both --wedge and --chart given: render one or the other");
     if (a.wedge && a.has_iscolorspace)
         return Status::error("--iscolorspace applies to INPUT; the --wedge is scene-linear");
+    if (a.chart && a.has_iscolorspace)
+        return Status::error("--iscolorspace applies to INPUT; the --chart is scene-linear");
     if (!a.has_filmgrain)
         return Status::error("no --filmgrain command given: nothing to do (--filmgrain alone "
                              "renders with the defaults)");
@@ -434,6 +464,7 @@ std::string help_text()
         << "       filmgrain PLATE.####.exr --frames LIST --filmgrain[:...] -o NEG.####.exr\n"
         << "                 [--skip-existing] [--skip-missing] [...]\n"
         << "       filmgrain --wedge --filmgrain[:key=value...] -o OUTPUT.exr [...]\n"
+        << "       filmgrain --chart --filmgrain[:key=value...] -o OUTPUT.exr [...]\n"
         << "       filmgrain --list-stocks | --print-stock NAME|FILE | --version | --help\n\n"
         << "Options:\n";
     constexpr size_t kColumn = 28;
@@ -555,6 +586,7 @@ std::string help_text()
                        + "+N interrupted by signal N (130: SIGINT, 143: SIGTERM).");
     out << "\nExamples:\n"
         << "    filmgrain --wedge --filmgrain -o out/wedge.exr --preview out/wedge.png\n"
+        << "    filmgrain --chart --filmgrain -o out/chart.exr --preview out/chart.png\n"
         << "    filmgrain photo.png --filmgrain:stock=paper:exposure=1:seed=7 -d half -o "
            "photo_neg.exr\n";
     return out.str();

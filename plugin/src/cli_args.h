@@ -16,6 +16,7 @@ enum class OutputType { float32, half16 };
 struct CliArgs {
     std::string input;  ///< INPUT (empty: none)
     bool wedge = false;  ///< --wedge: the built-in step wedge instead of INPUT
+    bool chart = false;  ///< --chart: the built-in look chart instead of INPUT
 
     std::string colorconfig;  ///< --colorconfig FILE (empty: $OCIO, else embedded)
     std::string iscolorspace;  ///< --iscolorspace NAME
@@ -52,7 +53,7 @@ struct CliArgs {
 /// what is wrong. Never throws.
 Status parse_command_line(int argc, const char** argv, CliArgs& out);
 
-/// Checks what a render needs: one of INPUT / --wedge, --filmgrain, -o
+/// Checks what a render needs: one of INPUT / --wedge / --chart, --filmgrain, -o
 /// FILE.exr, file name extensions, distinct paths. Touches no file other
 /// than to compare paths.
 Status validate_render_args(const CliArgs& args);

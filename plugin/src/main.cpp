@@ -1,8 +1,8 @@
 // filmgrain: the command-line tool. oiiotool-shaped; see `filmgrain --help`.
 //
 // main() only orders the stages: parse the command line, read the input (or
-// make the wedge), convert it to scene-linear (OCIO), run the operator,
-// write the outputs all-or-nothing. It does no maths of its own.
+// make the wedge or the chart), convert it to scene-linear (OCIO), run the
+// operator, write the outputs all-or-nothing. It does no maths of its own.
 #include <OpenImageIO/half.h>
 
 #include <OpenImageIO/filesystem.h>
@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "cli_args.h"
+#include "filmgrain/chart.h"
 #include "filmgrain/imagebufalgo_filmgrain.h"
 #include "filmgrain/ocio.h"
 #include "filmgrain/version.h"
@@ -489,6 +490,16 @@ OIIO::ImageBuf make_wedge()
     return buf;
 }
 
+OIIO::ImageBuf make_chart()
+{
+    const ChartSpec spec;
+    const std::vector<float> pixels = make_look_chart(spec);
+    OIIO::ImageBuf buf(OIIO::ImageSpec(static_cast<int>(spec.width_px),
+                                       static_cast<int>(spec.height_px), 3, OIIO::TypeFloat));
+    buf.set_pixels(buf.roi(), OIIO::TypeFloat, pixels.data());
+    return buf;
+}
+
 /// Chooses INPUT's colour space, converts `src` in place to the config's
 /// scene_linear and says which space was used. 1-channel images stay grey
 /// when the conversion is a no-op, else become (y, y, y) first.
@@ -656,6 +667,8 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                                                         : std::string("embedded") },
                       { "iscolorspace", a.has_iscolorspace ? a.iscolorspace : "" } };
     Json input = { { "wedge", a.wedge } };
+    if (a.chart)  // only then: the hashes of earlier renders stay valid
+        input["chart"] = true;
     if (!job.input.empty()) {
         std::error_code ec;
         input["path"]  = job.input;
@@ -746,6 +759,13 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
         report.input_colorspace = "scene_linear";
         con.info("input: the built-in step wedge, " + std::to_string(src.spec().width) + "x"
                  + std::to_string(src.spec().height) + " scene-linear grey");
+    } else if (a.chart) {
+        src                     = make_chart();
+        header                  = src.spec();
+        report.input_file       = "chart";
+        report.input_colorspace = "scene_linear";
+        con.info("input: the built-in look chart, " + std::to_string(src.spec().width) + "x"
+                 + std::to_string(src.spec().height) + " scene-linear RGB");
     } else {
         if (Status s = read_input(job.input, opts, cmd, src, header); !s)
             return s;
@@ -759,7 +779,7 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
 
     // Colour.
     t = Clock::now();
-    if (!a.wedge)
+    if (!a.wedge && !a.chart)
         if (Status s = convert_to_scene_linear(a, job.input, src, con, report.input_colorspace);
             !s)
             return s;
@@ -871,6 +891,8 @@ int render(const CliArgs& a, const Console& con)
     ctx.opts.scene = cmd.scene;
     if (a.wedge && !cmd.has_width_mm)
         ctx.opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
+    if (a.chart && !cmd.has_width_mm)
+        ctx.opts.scene.frame_width_mm = ChartSpec().strip_width_mm;
     ctx.opts.engine_options = cmd.engine_options;
     ctx.opts.scan_width     = cmd.scan_width;
     ctx.opts.scan_height    = cmd.scan_height;
@@ -886,11 +908,13 @@ int render(const CliArgs& a, const Console& con)
             const nlohmann::ordered_json line
                 = { { "frame", job.frame ? nlohmann::ordered_json(*job.frame)
                                          : nlohmann::ordered_json(nullptr) },
-                    { "input", a.wedge ? std::string("wedge") : job.input },
+                    { "input", a.wedge   ? std::string("wedge")
+                               : a.chart ? std::string("chart")
+                                         : job.input },
                     { "output", job.output },
                     { "stats", job.stats },
                     { "preview", job.preview },
-                    { "input_exists", a.wedge || fs::exists(job.input, ec) },
+                    { "input_exists", a.wedge || a.chart || fs::exists(job.input, ec) },
                     { "settings_hash", hash },
                     { "up_to_date", up_to_date(job, hash) } };
             std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace)
@@ -942,9 +966,10 @@ int run(int argc, const char** argv)
     const Console con(args.quiet, ::isatty(STDERR_FILENO) != 0, args.progress);
 
     if (args.version || args.list_stocks || !args.print_stock.empty()) {
-        if (!args.input.empty() || args.wedge || args.has_filmgrain || !args.output.empty())
+        if (!args.input.empty() || args.wedge || args.chart || args.has_filmgrain
+            || !args.output.empty())
             return con.fail("--version, --list-stocks and --print-stock print and exit: do "
-                            "not combine them with INPUT, --wedge, --filmgrain or -o");
+                            "not combine them with INPUT, --wedge, --chart, --filmgrain or -o");
         if (args.version)
             std::cout << "filmgrain " << version_string() << " (OpenImageIO "
                       << OIIO_VERSION_STRING << ")\n";

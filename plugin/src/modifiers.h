@@ -28,7 +28,8 @@ struct FilmgrainCommand {
     std::string stock = default_preset_name();
     /// `exposure=`, `shutter=`, `seed=`, `width_mm=`.
     SceneSettings scene;
-    /// Whether `width_mm=` was given (the --wedge strip has its own width).
+    /// Whether `width_mm=` was given (the --wedge and --chart strips have
+    /// their own widths).
     bool has_width_mm = false;
     /// `engine=`, `tolerance=`, and the expert overrides `kinetics=`,
     /// `photons=`, `coverage=`, `grains=`, `samples=`.

@@ -50,7 +50,7 @@ struct CliArgs;
 /// of a sequence) and its files (empty: not asked for).
 struct FrameJob {
     std::optional<int> frame;
-    std::string input;  ///< empty with --wedge
+    std::string input;  ///< empty with --wedge or --chart
     std::string output;
     std::string stats;
     std::string preview;

@@ -21,7 +21,7 @@ namespace filmgrain::cli {
 
 /// Wall-clock seconds of the stages of a run.
 struct StageSeconds {
-    double read     = 0.0;  ///< reading INPUT (or making the wedge)
+    double read     = 0.0;  ///< reading INPUT (or making the wedge or chart)
     double color    = 0.0;  ///< OCIO conversion to scene_linear
     double simulate = 0.0;  ///< the operator (render_negative)
     double write    = 0.0;  ///< writing the EXR and the preview
@@ -34,7 +34,7 @@ struct RunReport {
     SceneSettings scene;
     ScanGeometry scan;
     Roi roi;
-    std::string input_file;  ///< path, or "wedge"
+    std::string input_file;  ///< path, or "wedge" or "chart"
     std::string input_colorspace;
     /// --filmgrain:output= (output_kind_name).
     std::string output = "density";

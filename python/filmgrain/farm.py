@@ -53,7 +53,7 @@ DEFAULT_SCHEDULER_TIMEOUT_S = 20.0
 # (its --dry-run).
 CLI_VALUE_OPTIONS = {"--colorconfig", "--iscolorspace", "-d", "-o", "--frames", "--stats",
                      "--preview", "--threads"}
-CLI_FLAGS = {"--wedge", "--filmgrain", "--skip-existing", "--skip-missing"}
+CLI_FLAGS = {"--wedge", "--chart", "--filmgrain", "--skip-existing", "--skip-missing"}
 CLI_PRINT_AND_EXIT = {"--list-stocks", "--print-stock", "--version"}
 # Options that carry :key=value modifiers on the option word itself.
 CLI_MODIFIER_OPTIONS = {"--filmgrain", "-o"}
@@ -117,7 +117,7 @@ Farm options:
     -h, --help              Print this help and exit
 
 Every other argument is the CLI's (filmgrain --help) and goes to each task
-unchanged: INPUT or --wedge, --filmgrain[:...], -d, -o[:compression=...],
+unchanged: INPUT, --wedge or --chart, --filmgrain[:...], -d, -o[:compression=...],
 --colorconfig, --iscolorspace, --frames (one frame per task, INPUT the
 frame's file), --stats and --preview (frame patterns), --skip-existing,
 --skip-missing. --threads N is
