@@ -2,6 +2,7 @@
 #include "engine_plan.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -9,6 +10,9 @@
 #include <sstream>
 #include <tuple>
 
+#include "inhibition.h"
+#include "light_spread.h"
+#include "parallel.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -231,6 +235,18 @@ std::string format_g(double v)
     return o.str();
 }
 
+/// The spread exposure of a layer (row by row over the whole frame) as a
+/// one-channel image: LayerExposure reads it with weight 1.
+ImageView spread_view(const std::vector<float>& values, const ImageView& input)
+{
+    ImageView v;
+    v.pixels   = values.data();
+    v.width    = input.frame_width();
+    v.height   = input.frame_height();
+    v.channels = 1;
+    return v;
+}
+
 }  // namespace
 
 InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
@@ -283,10 +299,60 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     std::vector<Need> needs;
     std::vector<double> v_max(stock.layers.size(), 0.0);
 
+    // Light spread (MODEL.md 9) first: it changes the exposure every later
+    // choice reads. One layer per worker; each is a pure function of the
+    // layer and the whole input frame.
+    std::vector<std::shared_ptr<const std::vector<float>>> spread(stock.layers.size());
+    std::vector<double> spread_seconds(stock.layers.size(), 0.0);
+    {
+        std::vector<size_t> spreading;
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            if (stock.layers[l].spreads_light())
+                spreading.push_back(l);
+        std::atomic<bool> stop { false };
+        parallel_for(static_cast<int64_t>(spreading.size()), settings.nthreads, stop,
+                     [&](int, int64_t i) {
+            const auto t0      = std::chrono::steady_clock::now();
+            const size_t l     = spreading[static_cast<size_t>(i)];
+            const Layer& layer = stock.layers[l];
+            spread[l]          = std::make_shared<const std::vector<float>>(spread_exposure(
+                layer, LayerExposure(input, layer.sensitivity, frame.input_pitch_um),
+                input.frame_width(), input.frame_height(), frame.input_pitch_um));
+            spread_seconds[l]
+                = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        });
+    }
+
+    // Each layer's exposure value: the spread one, or the input's.
+    std::vector<LayerExposure> exposures;
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        exposures.push_back(spread[l] ? LayerExposure(spread_view(*spread[l], input),
+                                                      { 1.0, 0.0, 0.0 }, frame.input_pitch_um)
+                                      : LayerExposure(input, stock.layers[l].sensitivity,
+                                                      frame.input_pitch_um));
+
+    // Development inhibitors (MODEL.md 10), from those exposures.
+    InhibitionPlan inhibition;
+    double inhibition_seconds = 0.0;
+    if (stock.inhibits()) {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<const LayerExposure*> views;
+        for (const LayerExposure& e : exposures)
+            views.push_back(&e);
+        if (Status s = plan_inhibition(stock, scene, views, input.frame_width(),
+                                       input.frame_height(), frame.input_pitch_um,
+                                       settings.nthreads, inhibition);
+            !s)
+            return s;
+        inhibition_seconds
+            = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const Layer& layer = stock.layers[l];
-        LayerPlan plan { LayerExposure(input, layer.sensitivity, frame.input_pitch_um),
-                         {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0, 0.0 };
+        LayerPlan plan { exposures[l], {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0,
+                         spread_seconds[l] + inhibition_seconds / stock.layers.size(), spread[l],
+                         inhibition.log_factor.empty() ? nullptr : inhibition.log_factor[l] };
         double margin_um = 0.0, n_mean_area = 0.0, smallest_radius_um = 1e300;
         for (size_t p = 0; p < layer.populations.size(); ++p) {
             const Population& pop = layer.populations[p];
@@ -550,6 +616,15 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         const bool curves = all_curves(plan);
         if (settings.scale == ScaleMethod::grain || (!settings.scale && !curves))
             continue;
+        if (plan.inhibition) {
+            // The pixel statistics are tabulated over exposure alone; an
+            // inhibited layer's P also depends on its neighbourhood.
+            if (!settings.scale)
+                continue;
+            return Status::errorf("scale=pixel: layer '", layer.name,
+                                  "' is inhibited (MODEL.md 10), which the pixel statistics do "
+                                  "not model: use scale=grain");
+        }
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
                                   "' needs P(develop | mean photons) for every population, which "
@@ -587,11 +662,29 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         plan.reason += why.str();
     }
 
-    for (LayerPlan& plan : out) {
+    for (size_t l = 0; l < out.size(); ++l) {
+        LayerPlan& plan = out[l];
         std::ostringstream path, why;
+        if (plan.spread) {
+            const Layer& layer = stock.layers[l];
+            path << "spread=fft ";
+            why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
+                << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
+                << " " << halation_kernel_name(layer.halation_kernel) << " radius "
+                << format_g(layer.halation_radius_um)
+                << " um) over the whole frame, by its exact mean over each input pixel; ";
+        }
+        if (plan.inhibition) {
+            path << "inhibition ";
+            why << "development inhibited (MODEL.md 10: inhibitor diffusion "
+                << format_g(stock.inhibitor_diffusion_um)
+                << " um; expected densities from the expected curves, error of the log factor <= "
+                << format_g(inhibition.error) << "); ";
+        }
         if (plan.pixel_model) {
             path << "scale=pixel kinetics=curve exposure=box";
             plan.path = path.str();
+            plan.reason = why.str() + plan.reason;
             continue;
         }
         path << "kinetics=";

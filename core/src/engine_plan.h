@@ -12,6 +12,7 @@
 #include "exposure.h"
 #include "filmgrain/render.h"
 #include "geometry.h"
+#include "inhibition.h"
 #include "grain_kernel.h"
 #include "kinetics.h"
 #include "kinetics_table.h"
@@ -56,6 +57,13 @@ struct LayerPlan {
     std::string reason;
     double error_estimate = 0.0;
     double setup_seconds  = 0.0;
+    /// MODEL.md 9: the layer's spread exposure value over the whole input
+    /// frame (light_spread.h), which `exposure` then views; null when the
+    /// layer spreads no light (`exposure` views the input).
+    std::shared_ptr<const std::vector<float>> spread;
+    /// MODEL.md 10: the layer's log development factor per input pixel
+    /// (inhibition.h); null when nothing inhibits the layer.
+    std::shared_ptr<const FramePlane> inhibition;
 };
 
 /// Decides the paths for every layer and builds what they need. `roi` is

@@ -14,6 +14,7 @@
 #include "development.h"
 #include "exposure.h"
 #include "geometry.h"
+#include "inhibition.h"
 #include "kinetics_table.h"
 #include "pixel_model.h"
 #include "rng.h"
@@ -245,6 +246,7 @@ Status expected_curves(const Stock& stock, const SceneSettings& scene,
         const LayerModel model(stock, l, scene, models);
         out.push_back(expected_curve(stock, l, model, options.fog_only));
     }
+    apply_inhibition(stock, out);  // MODEL.md 10 (nothing without inhibition)
     return {};
 }
 

@@ -260,12 +260,14 @@ public:
                     }
                     FastCounts c;
                     if (pop.exposure == ExposureMethod::centre)
-                        develop_fast(pop, rect, scratch.discs, scratch.grains_seen, c,
+                        develop_fast(pop, layer.inhibition.get(), rect, scratch.discs,
+                                     scratch.grains_seen, c,
                                      [&](double x, double y, double r) {
                             return scratch.plane.at(x, y) * r * r * M_PI;
                         });
                     else
-                        develop_fast(pop, rect, scratch.discs, scratch.grains_seen, c,
+                        develop_fast(pop, layer.inhibition.get(), rect, scratch.discs,
+                                     scratch.grains_seen, c,
                                      [&](double x, double y, double r) {
                             return layer.exposure.integrate_over_disc(x, y, r);
                         });
@@ -367,11 +369,13 @@ private:
     /// MODEL.md 1-4 for the grains of a population near a tile, by the fast
     /// per-grain kernel (grain_kernel.h): one uniform per grain against
     /// P(develop | mean photons). `integral(x, y, r)` is the exposure value
-    /// integrated over the disc (value x um^2), chosen once per population.
-    /// Developed discs that touch the tile are appended to `discs`.
+    /// integrated over the disc (value x um^2), chosen once per population;
+    /// `inhibition` the layer's MODEL.md 10 plane, or null. Developed discs
+    /// that touch the tile are appended to `discs`.
     template<typename Integral>
-    void develop_fast(const PopulationPlan& pop, const RectUm& rect, std::vector<Disc>& discs,
-                      uint32_t& grains_seen, FastCounts& c, Integral&& integral) const
+    void develop_fast(const PopulationPlan& pop, const FramePlane* inhibition,
+                      const RectUm& rect, std::vector<Disc>& discs, uint32_t& grains_seen,
+                      FastCounts& c, Integral&& integral) const
     {
         // Without a curve (grains=fast asked for with other kinetics) every
         // grain takes the population's own decision.
@@ -386,7 +390,9 @@ private:
                 return;
             const double lambda = k * integral(x, y, r);
             // u in (0, 1); develops iff u >= 1 - P, as Development::develops.
-            const double u = (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
+            double u = (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
+            if (inhibition)
+                u = inhibited_uniform(u, inhibition->at(x, y));
             bool developed;
             GrainOutcome o;  // photons and events: only beyond the curve
             if (lambda <= lambda_max) {
@@ -418,7 +424,9 @@ private:
     {
         GrainOutcome o;
         Rng development_rng(g.id, Stage::development);
-        const double u = development_rng.uniform();
+        double u = development_rng.uniform();
+        if (layer.inhibition)
+            u = inhibited_uniform(u, layer.inhibition->at(g.x_um, g.y_um));
         if (pop.kinetics == KineticsMethod::chain) {
             // The reference: every photon and event, then development.
             Rng photon_rng(g.id, Stage::photons);
@@ -580,6 +588,22 @@ double max_radius_um(const Stock& stock, const SceneSettings& scene)
     return r;
 }
 
+/// The input pixels a render of `roi` reads: the ROI's film rectangle
+/// grown by the largest grain's radius, or the whole frame when a layer
+/// spreads light or inhibition acts (MODEL.md 9, 10: the spread exposure
+/// and the blurred densities are computed over the whole frame, so that a
+/// ROI reads exactly the values a full render does).
+InputRegion read_region(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                        const FrameGeometry& frame, const Roi& roi)
+{
+    bool whole_frame = stock.inhibits();  // MODEL.md 10's blur: computed the same way
+    for (const Layer& layer : stock.layers)
+        whole_frame = whole_frame || layer.spreads_light();
+    if (whole_frame)
+        return InputRegion { 0, 0, input.frame_width(), input.frame_height() };
+    return input_region(input, frame, roi, max_radius_um(stock, scene));
+}
+
 Status validate_request(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                         const RenderSettings& settings, const float* density)
 {
@@ -629,7 +653,7 @@ Status required_input_window(const Stock& stock, const SceneSettings& scene,
         ImageView whole;
         whole.width  = input_width;
         whole.height = input_height;
-        const InputRegion r = input_region(whole, frame, roi, max_radius_um(stock, scene));
+        const InputRegion r = read_region(stock, scene, whole, frame, roi);
         out                 = Roi { r.x0, r.y0, std::max(r.x0, r.x1), std::max(r.y0, r.y1) };
         return {};
     } catch (const std::exception& e) {
@@ -660,7 +684,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         }
 
         // The window must hold every input pixel the render reads.
-        const InputRegion need = input_region(input, frame, roi, max_radius_um(stock, scene));
+        const InputRegion need = read_region(stock, scene, input, frame, roi);
         if (need.x1 > need.x0 && need.y1 > need.y0
             && (need.x0 < input.x_origin || need.y0 < input.y_origin
                 || need.x1 > input.x_origin + input.width

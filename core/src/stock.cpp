@@ -41,6 +41,13 @@ const NumberField<Population> kPopulationFields[] = {
     { "rate_area_exponent", &Population::rate_area_exponent, -4.0, 4.0, false },
 };
 
+const NumberField<Layer> kLayerFields[] = {
+    { "scatter", &Layer::scatter, 0.0, 1.0, false },
+    { "scatter_sigma_um", &Layer::scatter_sigma_um, 0.0, 1000.0, false },
+    { "halation", &Layer::halation, 0.0, 1.0, false },
+    { "halation_radius_um", &Layer::halation_radius_um, 0.0, 5000.0, false },
+};
+
 const NumberField<Stock> kStockFields[] = {
     { "exposure_at_grey_lxs", &Stock::exposure_at_grey_lxs, 0.0, 1e6, true },
     { "development_time_s", &Stock::development_time_s, 0.0, 1e7, false },
@@ -48,7 +55,12 @@ const NumberField<Stock> kStockFields[] = {
     { "fog_tau_s", &Stock::fog_tau_s, 0.0, 1e30, true },
     { "base_density", &Stock::base_density, 0.0, 10.0, false },
     { "max_density", &Stock::max_density, 0.0, 20.0, true },
+    { "inhibitor_diffusion_um", &Stock::inhibitor_diffusion_um, 0.0, 1000.0, false },
 };
+
+/// Largest entry of the inhibition matrix (MODEL.md 10): exp(-10 D) at a
+/// density of 1 already stops development.
+constexpr double kMaxInhibition = 10.0;
 
 constexpr size_t kMaxLayers      = 16;
 constexpr size_t kMaxPopulations = 16;
@@ -140,11 +152,26 @@ Status parse_layer(const Json& j, const std::string& path, Layer& out)
     if (Status s = expect_object(j, path); !s)
         return s;
     const std::string prefix = path + ".";
+    const std::set<std::string> other_keys = { "name", "sensitivity", "populations",
+                                               "halation_kernel" };
+    if (Status s = read_numbers(j, kLayerFields, other_keys, prefix, out); !s)
+        return s;
     for (auto it = j.begin(); it != j.end(); ++it) {
         const std::string& key = it.key();
         if (key == "name") {
             if (Status s = read_string(j, "name", prefix, out.name); !s)
                 return s;
+        } else if (key == "halation_kernel") {
+            std::string name;
+            if (Status s = read_string(j, "halation_kernel", prefix, name); !s)
+                return s;
+            if (name == halation_kernel_name(HalationKernel::disc))
+                out.halation_kernel = HalationKernel::disc;
+            else if (name == halation_kernel_name(HalationKernel::ring))
+                out.halation_kernel = HalationKernel::ring;
+            else
+                return Status::errorf(prefix, "halation_kernel = '", name,
+                                      "': must be 'disc' or 'ring'");
         } else if (key == "sensitivity") {
             if (!it->is_array() || it->size() != 3)
                 return Status::errorf(prefix, "sensitivity must be an array of 3 numbers "
@@ -168,15 +195,17 @@ Status parse_layer(const Json& j, const std::string& path, Layer& out)
                     return s;
                 out.populations.push_back(pop);
             }
-        } else {
-            return Status::errorf("unknown key '", prefix, key,
-                                  "'; allowed keys here: name, sensitivity, populations");
         }
     }
     return {};
 }
 
 }  // namespace
+
+const char* halation_kernel_name(HalationKernel kernel)
+{
+    return kernel == HalationKernel::ring ? "ring" : "disc";
+}
 
 Status Stock::validate() const
 {
@@ -210,6 +239,15 @@ Status Stock::validate() const
         if (sum <= 0.0)
             return Status::errorf(prefix, "sensitivity is all zero: the layer could never "
                                   "be exposed");
+        for (const auto& f : kLayerFields)
+            if (Status s = check_range(f, layer.*(f.member), prefix); !s)
+                return s;
+        if (layer.scatter > 0.0 && layer.scatter_sigma_um <= 0.0)
+            return Status::errorf(prefix, "scatter = ", format_number(layer.scatter),
+                                  " needs scatter_sigma_um > 0 (the width of the spread)");
+        if (layer.halation > 0.0 && layer.halation_radius_um <= 0.0)
+            return Status::errorf(prefix, "halation = ", format_number(layer.halation),
+                                  " needs halation_radius_um > 0 (the radius of the halo)");
         if (layer.populations.empty() || layer.populations.size() > kMaxPopulations)
             return Status::errorf(prefix, "populations has ", layer.populations.size(),
                                   " entries: must have 1 to ", kMaxPopulations);
@@ -220,7 +258,32 @@ Status Stock::validate() const
                     return s;
         }
     }
+    if (!inhibition.empty()) {
+        if (inhibition.size() != layers.size())
+            return Status::errorf("inhibition has ", inhibition.size(), " rows: must have one per "
+                                  "layer (", layers.size(), ")");
+        for (size_t k = 0; k < inhibition.size(); ++k) {
+            if (inhibition[k].size() != layers.size())
+                return Status::errorf("inhibition[", k, "] has ", inhibition[k].size(),
+                                      " entries: must have one per layer (", layers.size(), ")");
+            for (size_t j = 0; j < inhibition[k].size(); ++j) {
+                const double v = inhibition[k][j];
+                if (!std::isfinite(v) || v < 0.0 || v > kMaxInhibition)
+                    return Status::errorf("inhibition[", k, "][", j, "] = ", format_number(v),
+                                          ": must be in [0, ", format_number(kMaxInhibition), "]");
+            }
+        }
+    }
     return {};
+}
+
+bool Stock::inhibits() const
+{
+    for (const auto& row : inhibition)
+        for (double v : row)
+            if (v != 0.0)
+                return true;
+    return false;
 }
 
 Status parse_stock_json(const std::string& text, const std::string& origin, Stock& out)
@@ -238,7 +301,7 @@ Status parse_stock_json(const std::string& text, const std::string& origin, Stoc
         return Status::errorf(where, ": ", s.message());
 
     Stock stock;
-    const std::set<std::string> other_keys = { "name", "description", "layers" };
+    const std::set<std::string> other_keys = { "name", "description", "layers", "inhibition" };
     Status s = read_numbers(j, kStockFields, other_keys, "", stock);
     if (s)
         s = read_string(j, "name", "", stock.name);
@@ -259,10 +322,39 @@ Status parse_stock_json(const std::string& text, const std::string& origin, Stoc
             }
         }
     }
+    if (s) {
+        auto it = j.find("inhibition");
+        if (it != j.end()) {
+            const auto bad = [&] {
+                return Status::errorf("inhibition must be an array of arrays of numbers (one row "
+                                      "per layer), not ", it->dump());
+            };
+            if (!it->is_array())
+                s = bad();
+            for (size_t k = 0; s && k < it->size(); ++k) {
+                const Json& row = (*it)[k];
+                if (!row.is_array()) {
+                    s = bad();
+                    break;
+                }
+                stock.inhibition.emplace_back();
+                for (const Json& v : row) {
+                    if (!v.is_number()) {
+                        s = Status::errorf("inhibition[", k, "] must hold numbers, not ",
+                                           type_name(v), " (", v.dump(), ")");
+                        break;
+                    }
+                    stock.inhibition.back().push_back(v.get<double>());
+                }
+            }
+        }
+    }
     if (s)
         s = stock.validate();
     if (!s)
         return Status::errorf(where, ": ", s.message());
+    if (!stock.inhibits())
+        stock.inhibition.clear();  // all zero: stored empty
     out = std::move(stock);
     return {};
 }
@@ -274,11 +366,21 @@ std::string stock_to_json(const Stock& stock, int indent)
     j["description"] = stock.description;
     for (const auto& f : kStockFields)
         j[f.key] = stock.*(f.member);
+    j["inhibition"] = Json::array();
+    for (size_t k = 0; k < stock.layers.size(); ++k) {
+        Json row = Json::array();
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            row.push_back(stock.inhibition.empty() ? 0.0 : stock.inhibition[k][l]);
+        j["inhibition"].push_back(row);
+    }
     j["layers"] = Json::array();
     for (const Layer& layer : stock.layers) {
         Json jl;
         jl["name"]        = layer.name;
         jl["sensitivity"] = layer.sensitivity;
+        for (const auto& f : kLayerFields)
+            jl[f.key] = layer.*(f.member);
+        jl["halation_kernel"] = halation_kernel_name(layer.halation_kernel);
         jl["populations"] = Json::array();
         for (const Population& pop : layer.populations) {
             Json jp;

@@ -31,6 +31,18 @@ struct Population {
     double rate_area_exponent = 0.0;
 };
 
+/// The shape of a layer's halation kernel (MODEL.md 9), both normalised to
+/// unit integral: `disc`, uniform inside halation_radius_um; `ring`, uniform
+/// on the annulus between kRingInnerFraction * halation_radius_um and
+/// halation_radius_um (light reflected from the base's rear surface comes
+/// back concentrated near the radius).
+enum class HalationKernel { disc, ring };
+
+/// Inner radius of the `ring` halation kernel, as a fraction of its radius.
+inline constexpr double kRingInnerFraction = 0.75;
+
+const char* halation_kernel_name(HalationKernel kernel);
+
 /// One emulsion layer: an output channel.
 struct Layer {
     /// Output channel name (non-empty, unique within the stock).
@@ -39,7 +51,29 @@ struct Layer {
     /// Each in [0, 100], not all zero.
     std::array<double, 3> sensitivity = { 0.2126, 0.7152, 0.0722 };
     /// At least one population.
-    std::vector<Population> populations = { Population() };
+    std::vector<Population> populations = std::vector<Population>(1);
+
+    /// MODEL.md 9, light spread in the film before photons are counted.
+    /// Fraction of the light scattered sideways. Range [0, 1].
+    double scatter = 0.0;
+    /// Standard deviation of the scatter's Gaussian, micrometres on the
+    /// film. Range [0, 1000]; > 0 when scatter > 0.
+    double scatter_sigma_um = 0.0;
+    /// Fraction of the (scattered) light reflected back into the layer from
+    /// the base. Range [0, 1].
+    double halation = 0.0;
+    /// Radius of the halation kernel, micrometres on the film. Range
+    /// [0, 5000]; > 0 when halation > 0.
+    double halation_radius_um = 0.0;
+    HalationKernel halation_kernel = HalationKernel::disc;
+
+    /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
+    /// without spread is rendered exactly as before the keys existed.
+    bool spreads_light() const
+    {
+        return (scatter > 0.0 && scatter_sigma_um > 0.0)
+               || (halation > 0.0 && halation_radius_um > 0.0);
+    }
 };
 
 /// A film stock: its layers and its processing (MODEL.md 2, 4, 5).
@@ -61,6 +95,18 @@ struct Stock {
     double max_density = 4.0;
     /// One to 16 layers.
     std::vector<Layer> layers = { Layer() };
+    /// MODEL.md 10, development inhibitors: inhibition[k][j] is how strongly
+    /// layer j's expected developed density (blurred) holds back development
+    /// in layer k: P -> P exp(-sum_j inhibition[k][j] Dbar_j). One row per
+    /// layer, one column per layer, each in [0, 10]; empty means all zero
+    /// (no inhibition; an all-zero matrix is stored empty).
+    std::vector<std::vector<double>> inhibition;
+    /// Standard deviation of the inhibitors' diffusion, micrometres on the
+    /// film. Range [0, 1000].
+    double inhibitor_diffusion_um = 0.0;
+
+    /// Whether any inhibition is on: without, development is MODEL.md 4's.
+    bool inhibits() const;
 
     /// Check every field against its range; the message names the field
     /// (as a JSON path such as layers[1].populations[0].diameter_um), its

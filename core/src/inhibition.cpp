@@ -1,0 +1,128 @@
+// MODEL.md section 10: development inhibitors.
+#include "inhibition.h"
+
+#include <algorithm>
+#include <atomic>
+
+#include "image_formation.h"
+#include "light_spread.h"
+#include "parallel.h"
+
+namespace filmgrain {
+
+namespace {
+
+/// Sum of a layer's sensitivity weights: its exposure value per unit of a
+/// neutral grey (MODEL.md 2: v = dot(sensitivity, (y, y, y))).
+double neutral_weight(const Layer& layer)
+{
+    return layer.sensitivity[0] + layer.sensitivity[1] + layer.sensitivity[2];
+}
+
+}  // namespace
+
+Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
+                       const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
+                       int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out)
+{
+    out = InhibitionPlan {};
+    const size_t nl = stock.layers.size();
+    out.log_factor.assign(nl, nullptr);
+    if (!stock.inhibits())
+        return {};
+    // Dbar_j comes from the curves without inhibition (MODEL.md 10: "the
+    // expected density that layer j would have at x without inhibition").
+    Stock plain      = stock;
+    plain.inhibition = {};
+    ExpectedCurveOptions options;
+    options.nthreads = nthreads;
+    std::vector<ExpectedCurve> curves;
+    if (Status s = expected_curves(plain, scene, options, curves); !s)
+        return Status::errorf("inhibition (MODEL.md 10) needs each layer's expected curve: ",
+                              s.message());
+
+    // The donors: every layer some row names.
+    std::vector<bool> donor(nl, false);
+    for (size_t k = 0; k < nl; ++k)
+        for (size_t j = 0; j < nl; ++j)
+            donor[j] = donor[j] || stock.inhibition[k][j] != 0.0;
+    const size_t n = static_cast<size_t>(frame_width * frame_height);
+    std::vector<std::vector<double>> blurred(nl);
+    std::atomic<bool> stop { false };
+    parallel_for(static_cast<int64_t>(nl), nthreads, stop, [&](int, int64_t jj) {
+        const size_t j = static_cast<size_t>(jj);
+        if (!donor[j])
+            return;
+        std::vector<double> d(n);
+        for (int64_t y = 0; y < frame_height; ++y)
+            for (int64_t x = 0; x < frame_width; ++x)
+                d[static_cast<size_t>(y * frame_width + x)]
+                    = curves[j].density_at(exposures[j]->value(x, y)) - curves[j].base_density;
+        blurred[j] = stock.inhibitor_diffusion_um > 0.0
+                         ? spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
+                                        stock.inhibitor_diffusion_um, 0.0, 0.0,
+                                        HalationKernel::disc)
+                         : std::move(d);
+    });
+
+    for (size_t k = 0; k < nl; ++k) {
+        double error = 0.0;
+        bool any     = false;
+        for (size_t j = 0; j < nl; ++j) {
+            any = any || stock.inhibition[k][j] != 0.0;
+            error += stock.inhibition[k][j] * curves[j].density_error;
+        }
+        if (!any)
+            continue;
+        out.error = std::max(out.error, error);
+        auto plane      = std::make_shared<FramePlane>();
+        plane->width    = frame_width;
+        plane->height   = frame_height;
+        plane->pitch_um = pitch_um;
+        plane->values.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            double l = 0.0;
+            for (size_t j = 0; j < nl; ++j)
+                if (stock.inhibition[k][j] != 0.0)
+                    l += stock.inhibition[k][j] * blurred[j][i];
+            plane->values[i] = static_cast<float>(std::max(0.0, l));
+        }
+        out.log_factor[k] = std::move(plane);
+    }
+    return {};
+}
+
+void apply_inhibition(const Stock& stock, std::vector<ExpectedCurve>& curves)
+{
+    if (!stock.inhibits())
+        return;
+    const std::vector<ExpectedCurve> plain = curves;
+    for (size_t k = 0; k < curves.size(); ++k) {
+        const double wk = neutral_weight(stock.layers[k]);
+        double error    = 0.0;
+        for (size_t j = 0; j < curves.size(); ++j)
+            error += stock.inhibition[k][j] * plain[j].density_error;
+        double largest_density = 0.0;
+        for (CurvePoint& p : curves[k].points) {
+            // The neutral grey y that gives layer k the value v: every
+            // layer j then has y * w_j.
+            const double grey = p.value / wk;
+            double log_factor = 0.0;
+            for (size_t j = 0; j < curves.size(); ++j)
+                if (stock.inhibition[k][j] != 0.0)
+                    log_factor += stock.inhibition[k][j]
+                                  * (plain[j].density_at(grey * neutral_weight(stock.layers[j]))
+                                     - plain[j].base_density);
+            // E[T] = exp(-K) and P -> P exp(-log_factor) scale K alike.
+            p.transmittance = std::pow(p.transmittance, std::exp(-log_factor));
+            p.density       = density_from_transmittance(p.transmittance, curves[k].max_density,
+                                                     curves[k].base_density);
+            largest_density = std::max(largest_density, p.density - curves[k].base_density);
+        }
+        // D_k - base = log10(e) K exp(-log_factor): an error e in
+        // log_factor moves it by at most (D_k - base) e.
+        curves[k].density_error += largest_density * error;
+    }
+}
+
+}  // namespace filmgrain
