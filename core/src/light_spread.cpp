@@ -39,6 +39,11 @@ void normalise(std::vector<double>& w)
         v /= sum;
 }
 
+/// Largest transform spread_frame makes: 2^28 values (2 GiB of doubles,
+/// twice that with a halation kernel's), beyond an 8K frame with a 5 mm
+/// halo at 6 um pixels.
+constexpr double kMaxTransformCells = 268435456.0;
+
 /// FFTW's planner is not thread-safe (its execute is): plans are made and
 /// destroyed under this lock.
 std::mutex& planner_mutex()
@@ -216,6 +221,19 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
     const bool scattering = scatter > 0.0 && scatter_sigma_um > 0.0;
     const bool haloing    = halation > 0.0 && halation_radius_um > 0.0;
     const double s        = scattering ? scatter : 0.0;
+    // The transform's size, checked before anything is built: a kernel far
+    // wider than the frame's pixels (a tiny pitch) must not exhaust memory.
+    const double reach_px = (scattering ? 6.0 * scatter_sigma_um / pitch_um + 2.0 : 0.0)
+                            + (haloing ? halation_radius_um / pitch_um + 2.0 : 0.0);
+    const double cells = (static_cast<double>(w) + reach_px) * (static_cast<double>(h) + reach_px);
+    if (!(cells <= kMaxTransformCells))
+        throw std::runtime_error(
+            "light spread: the kernels reach " + std::to_string(reach_px) + " input pixels of "
+            + std::to_string(pitch_um) + " um beyond a " + std::to_string(w) + "x"
+            + std::to_string(h) + " frame, a transform of " + std::to_string(cells)
+            + " values, above the limit of " + std::to_string(kMaxTransformCells)
+            + ": lower scatter_sigma_um, halation_radius_um or inhibitor_diffusion_um, or "
+              "render a coarser input");
     PixelKernel g, k;
     if (scattering)
         g = gaussian_pixel_kernel(scatter_sigma_um, pitch_um);

@@ -63,7 +63,9 @@ std::vector<float> spread_exposure(const Layer& layer, const LayerExposure& expo
 /// outside): (1 - scatter) V + scatter (G * V), then + halation (K * that),
 /// with the pixel kernels above. spread_exposure applies it to a layer's
 /// exposure; MODEL.md 10 blurs expected densities with it (scatter 1, no
-/// halation: the Gaussian alone). Deterministic as spread_exposure.
+/// halation: the Gaussian alone). Deterministic as spread_exposure. Throws
+/// std::runtime_error (naming the keys to lower) when the frame plus the
+/// kernels' reach would need a transform of more than 2^28 values.
 std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
                                  double scatter_sigma_um, double halation,

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -186,6 +188,22 @@ TEST(LightSpread, PixelMeansAreExact)
                 worst = std::max(worst, std::fabs(mean - ref) / ref);
             }
         EXPECT_LT(worst, tolerance) << "halation " << layer.halation;
+    }
+}
+
+TEST(LightSpread, AKernelFarWiderThanThePixelsIsAnError)
+{
+    // A 5 mm halo on 0.01 um pixels: 5e5 pixels of reach. Refused before
+    // anything is allocated, with the keys to change.
+    Layer halo;
+    halo.halation           = 0.5;
+    halo.halation_radius_um = 5000.0;
+    const std::vector<float> img(16, 1.0f);
+    try {
+        spread(halo, img, 4, 4, 0.01);
+        FAIL() << "no error";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("halation_radius_um"), std::string::npos) << e.what();
     }
 }
 
