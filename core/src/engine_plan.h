@@ -64,6 +64,11 @@ struct LayerPlan {
     /// MODEL.md 10: the layer's log development factor per input pixel
     /// (inhibition.h); null when nothing inhibits the layer.
     std::shared_ptr<const FramePlane> inhibition;
+    /// MODEL.md 8: how far a developed grain's image reaches in grain radii
+    /// (1: silver), and for a dye layer the samples per pixel axis of its
+    /// image (0: silver, whose coverage method is above).
+    double image_reach = 1.0;
+    int dye_samples    = 0;
 };
 
 /// Decides the paths for every layer and builds what they need. `roi` is

@@ -12,6 +12,7 @@
 
 #include "develop_curve.h"
 #include "development.h"
+#include "dye.h"
 #include "exposure.h"
 #include "geometry.h"
 #include "inhibition.h"
@@ -31,10 +32,13 @@ constexpr double kLog10E = 0.43429448190325176;
 /// range and spacing).
 constexpr int kOctavesBelow = 16, kOctavesAbove = 12, kPerOctave = 16;
 /// E[T] of a uniform patch of one layer at exposure value v (MODEL.md 5),
-/// with the pixel model's size quadrature and P(develop | mean photons).
-double mean_transmittance(const std::vector<PixelPopulation>& pops, double v)
+/// with the pixel model's size quadrature and P(develop | mean photons);
+/// `cloud_factor` the blocking area of a dye layer's clouds over the
+/// grain's (MODEL.md 8: 1 for silver).
+double mean_transmittance(const std::vector<PixelPopulation>& pops, double v,
+                          double cloud_factor)
 {
-    return std::exp(-coverage_exponent(pops, v));
+    return std::exp(-cloud_factor * coverage_exponent(pops, v));
 }
 
 double clamp_density(double transmittance, double base, double max_density)
@@ -176,6 +180,7 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
 {
     const std::vector<PixelPopulation>& pops = model.populations();
     const double lxs_per_value               = model.lxs_per_value();
+    const double cloud_factor                = cloud_area_factor(stock.layers[l]);
     ExpectedCurve curve;
     curve.layer        = stock.layers[l].name;
     curve.base_density = stock.base_density;
@@ -184,7 +189,7 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
         CurvePoint c;
         c.value         = v;
         c.exposure_lxs  = v * lxs_per_value;
-        c.transmittance = mean_transmittance(pops, v);
+        c.transmittance = mean_transmittance(pops, v, cloud_factor);
         c.density       = clamp_density(c.transmittance, stock.base_density, stock.max_density);
         return c;
     };
@@ -201,13 +206,14 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
             // Linear interpolation in ln v errs most half-way.
             const CurvePoint& a = curve.points[curve.points.size() - 2];
             const CurvePoint& b = curve.points.back();
-            const double mid    = mean_transmittance(pops, std::exp(log_v0 + (i - 0.5) * step));
+            const double mid
+                = mean_transmittance(pops, std::exp(log_v0 + (i - 0.5) * step), cloud_factor);
             interpolation = std::max(
                 interpolation, std::fabs(0.5 * (a.transmittance + b.transmittance) - mid) / mid);
         }
     }
     // d(-log10 T) = 0.434 dT / T, and dK = -dT / T.
-    curve.density_error = kLog10E * (model.coverage_error() + interpolation);
+    curve.density_error = kLog10E * (cloud_factor * model.coverage_error() + interpolation);
     return curve;
 }
 

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "development.h"
+#include "dye.h"
 #include "engine_plan.h"
 #include "exposure.h"
 #include "geometry.h"
@@ -203,6 +204,7 @@ struct TileScratch {
     GridCoverageScratch grid;
     ScanlineScratch scanline;
     RasterScratch raster;
+    DyeScratch dye;
     ExposurePlane plane;
     std::vector<double> values;
     /// Grains visited, for the stop check (poll_stop).
@@ -260,14 +262,12 @@ public:
                     }
                     FastCounts c;
                     if (pop.exposure == ExposureMethod::centre)
-                        develop_fast(pop, layer.inhibition.get(), rect, scratch.discs,
-                                     scratch.grains_seen, c,
+                        develop_fast(layer, pop, rect, scratch.discs, scratch.grains_seen, c,
                                      [&](double x, double y, double r) {
                             return scratch.plane.at(x, y) * r * r * M_PI;
                         });
                     else
-                        develop_fast(pop, layer.inhibition.get(), rect, scratch.discs,
-                                     scratch.grains_seen, c,
+                        develop_fast(layer, pop, rect, scratch.discs, scratch.grains_seen, c,
                                      [&](double x, double y, double r) {
                             return layer.exposure.integrate_over_disc(x, y, r);
                         });
@@ -277,10 +277,10 @@ public:
                     events += c.events;
                     continue;
                 }
-                pop.grains.for_each_grain_near(rect, [&](const Grain& g) {
+                pop.grains.for_each_grain_near(reach_rect(rect, layer, pop), [&](const Grain& g) {
                     poll_stop(scratch.grains_seen);
                     const Disc disc { g.x_um, g.y_um, g.radius_um };
-                    if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
+                    if (!image_touches_rect(layer, disc, rect))
                         return;
                     const GrainOutcome o = simulate_grain(layer, pop, g);
                     // Count each grain once: in the tile holding its centre.
@@ -366,27 +366,50 @@ private:
         uint64_t grains = 0, developed = 0, photons = 0, events = 0;
     };
 
+    /// The rectangle whose nearby grains (within their own radius) can have
+    /// an image reaching `rect`: `rect` itself for silver, grown by the
+    /// clouds' extra reach for dye (MODEL.md 8).
+    static RectUm reach_rect(const RectUm& rect, const LayerPlan& layer,
+                             const PopulationPlan& pop)
+    {
+        if (layer.image_reach <= 1.0)
+            return rect;
+        const double m = (layer.image_reach - 1.0) * pop.grains.max_radius_um();
+        return { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m, rect.y1_um + m };
+    }
+
+    /// Whether a grain's image (its disc, or its cloud) touches `rect`.
+    static bool image_touches_rect(const LayerPlan& layer, const Disc& grain, const RectUm& rect)
+    {
+        const Disc image = layer.image_reach == 1.0
+                               ? grain
+                               : Disc { grain.x_um, grain.y_um, layer.image_reach * grain.r_um };
+        return disc_touches_rect(image, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um);
+    }
+
     /// MODEL.md 1-4 for the grains of a population near a tile, by the fast
     /// per-grain kernel (grain_kernel.h): one uniform per grain against
     /// P(develop | mean photons). `integral(x, y, r)` is the exposure value
-    /// integrated over the disc (value x um^2), chosen once per population;
-    /// `inhibition` the layer's MODEL.md 10 plane, or null. Developed discs
-    /// that touch the tile are appended to `discs`.
+    /// integrated over the disc (value x um^2), chosen once per population.
+    /// Developed grains whose image touches the tile are appended to
+    /// `discs`.
     template<typename Integral>
-    void develop_fast(const PopulationPlan& pop, const FramePlane* inhibition,
-                      const RectUm& rect, std::vector<Disc>& discs, uint32_t& grains_seen,
-                      FastCounts& c, Integral&& integral) const
+    void develop_fast(const LayerPlan& layer, const PopulationPlan& pop, const RectUm& rect,
+                      std::vector<Disc>& discs, uint32_t& grains_seen, FastCounts& c,
+                      Integral&& integral) const
     {
+        const FramePlane* inhibition = layer.inhibition.get();
         // Without a curve (grains=fast asked for with other kinetics) every
         // grain takes the population's own decision.
         const DevelopCurve* curve = pop.curve.get();
         const double lambda_max   = curve ? curve->lambda_max() : -1.0;
         const double k            = pop.photons_per_value_um2;
-        pop.fast->for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits,
-                                                uint64_t id) {
+        pop.fast->for_each_grain_near(reach_rect(rect, layer, pop), [&](double x, double y,
+                                                                        double r, uint32_t bits,
+                                                                        uint64_t id) {
             poll_stop(grains_seen);
             const Disc disc { x, y, r };
-            if (!disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
+            if (!image_touches_rect(layer, disc, rect))
                 return;
             const double lambda = k * integral(x, y, r);
             // u in (0, 1); develops iff u >= 1 - P, as Development::develops.
@@ -501,6 +524,15 @@ private:
                               1.0 - scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
     }
 
+    void store_transmittance(size_t layer, int64_t ix, int64_t iy, double transmittance) const
+    {
+        const size_t nl = m_stock.layers.size();
+        const size_t o  = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
+                                             + (ix - m_roi.x_begin));
+        m_out[o * nl + layer] = static_cast<float>(
+            density_from_transmittance(transmittance, m_stock.max_density, m_stock.base_density));
+    }
+
     void store_density(size_t layer, int64_t ix, int64_t iy, double covered_fraction) const
     {
         const size_t nl = m_stock.layers.size();
@@ -523,6 +555,15 @@ private:
         const double px = m_frame.scan_pitch_x_um, py = m_frame.scan_pitch_y_um;
         scratch.fraction.resize(static_cast<size_t>(tw * th));
         double* fraction = scratch.fraction.data();
+        if (plan.dye_samples > 0) {  // MODEL.md 8: the mean of 10^-D
+            dye_transmittance(scratch.discs, m_stock.layers[layer], m_stock.max_density, x0, y0,
+                              x1, y1, px, py, plan.dye_samples, scratch.dye, fraction);
+            for (int64_t iy = y0; iy < y1; ++iy)
+                for (int64_t ix = x0; ix < x1; ++ix)
+                    store_transmittance(layer, ix, iy,
+                                        fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
+            return;
+        }
         switch (plan.coverage) {
         case CoverageMethod::exact:
             grid_coverage(scratch.discs, x0, y0, x1, y1, px, py, scratch.grid, fraction);
@@ -575,16 +616,19 @@ InputStats scan_input(const ImageView& input, const InputRegion& r)
     return s;
 }
 
-/// The largest grain radius any population of the stock generates: the
-/// margin around a region within which grains can reach into it.
+/// The largest grain radius any population of the stock generates (times
+/// its clouds' reach on a dye layer, MODEL.md 8): the margin around a region
+/// within which grains can reach into it.
 double max_radius_um(const Stock& stock, const SceneSettings& scene)
 {
     double r = 0.0;
     for (size_t l = 0; l < stock.layers.size(); ++l)
         for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
-            r = std::max(r, PopulationGrains(stock.layers[l].populations[p], grain_seed(scene),
-                                             static_cast<uint32_t>(l), static_cast<uint32_t>(p))
-                                .max_radius_um());
+            r = std::max(r, std::max(1.0, image_reach_factor(stock.layers[l]))
+                                * PopulationGrains(stock.layers[l].populations[p],
+                                                   grain_seed(scene), static_cast<uint32_t>(l),
+                                                   static_cast<uint32_t>(p))
+                                      .max_radius_um());
     return r;
 }
 

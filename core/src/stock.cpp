@@ -46,6 +46,16 @@ const NumberField<Layer> kLayerFields[] = {
     { "scatter_sigma_um", &Layer::scatter_sigma_um, 0.0, 1000.0, false },
     { "halation", &Layer::halation, 0.0, 1.0, false },
     { "halation_radius_um", &Layer::halation_radius_um, 0.0, 5000.0, false },
+    { "cloud_diameter_ratio", &Layer::cloud_diameter_ratio, 0.1, 10.0, false },
+    { "cloud_density", &Layer::cloud_density, 0.0, 20.0, true },
+};
+
+/// A layer's keys that name one of a few words: the key, its values (the
+/// enum's order) and where it is stored.
+template<typename E> struct WordField {
+    const char* key;
+    std::vector<const char*> words;
+    E Layer::*member;
 };
 
 const NumberField<Stock> kStockFields[] = {
@@ -147,13 +157,53 @@ Status parse_population(const Json& j, const std::string& path, Population& out)
     return read_numbers(j, kPopulationFields, {}, path + ".", out);
 }
 
+const WordField<HalationKernel>& halation_kernel_field()
+{
+    static const WordField<HalationKernel> f { "halation_kernel", { "disc", "ring" },
+                                               &Layer::halation_kernel };
+    return f;
+}
+const WordField<LayerImage>& image_field()
+{
+    static const WordField<LayerImage> f { "image", { "silver", "dye" }, &Layer::image };
+    return f;
+}
+const WordField<CloudProfile>& cloud_profile_field()
+{
+    static const WordField<CloudProfile> f { "cloud_profile", { "disc", "gaussian" },
+                                             &Layer::cloud_profile };
+    return f;
+}
+
+template<typename E>
+Status read_word(const Json& j, const WordField<E>& field, const std::string& prefix, Layer& out)
+{
+    std::string word;
+    if (Status s = read_string(j, field.key, prefix, word); !s)
+        return s;
+    std::string allowed;
+    for (size_t i = 0; i < field.words.size(); ++i) {
+        if (word == field.words[i]) {
+            out.*(field.member) = static_cast<E>(i);
+            return {};
+        }
+        allowed += std::string(i ? ", " : "") + "'" + field.words[i] + "'";
+    }
+    return Status::errorf(prefix, field.key, " = '", word, "': must be one of ", allowed);
+}
+
+template<typename E> const char* word_of(const WordField<E>& field, E value)
+{
+    return field.words[static_cast<size_t>(value)];
+}
+
 Status parse_layer(const Json& j, const std::string& path, Layer& out)
 {
     if (Status s = expect_object(j, path); !s)
         return s;
     const std::string prefix = path + ".";
     const std::set<std::string> other_keys = { "name", "sensitivity", "populations",
-                                               "halation_kernel" };
+                                               "halation_kernel", "image", "cloud_profile" };
     if (Status s = read_numbers(j, kLayerFields, other_keys, prefix, out); !s)
         return s;
     for (auto it = j.begin(); it != j.end(); ++it) {
@@ -162,16 +212,14 @@ Status parse_layer(const Json& j, const std::string& path, Layer& out)
             if (Status s = read_string(j, "name", prefix, out.name); !s)
                 return s;
         } else if (key == "halation_kernel") {
-            std::string name;
-            if (Status s = read_string(j, "halation_kernel", prefix, name); !s)
+            if (Status s = read_word(j, halation_kernel_field(), prefix, out); !s)
                 return s;
-            if (name == halation_kernel_name(HalationKernel::disc))
-                out.halation_kernel = HalationKernel::disc;
-            else if (name == halation_kernel_name(HalationKernel::ring))
-                out.halation_kernel = HalationKernel::ring;
-            else
-                return Status::errorf(prefix, "halation_kernel = '", name,
-                                      "': must be 'disc' or 'ring'");
+        } else if (key == "image") {
+            if (Status s = read_word(j, image_field(), prefix, out); !s)
+                return s;
+        } else if (key == "cloud_profile") {
+            if (Status s = read_word(j, cloud_profile_field(), prefix, out); !s)
+                return s;
         } else if (key == "sensitivity") {
             if (!it->is_array() || it->size() != 3)
                 return Status::errorf(prefix, "sensitivity must be an array of 3 numbers "
@@ -204,7 +252,14 @@ Status parse_layer(const Json& j, const std::string& path, Layer& out)
 
 const char* halation_kernel_name(HalationKernel kernel)
 {
-    return kernel == HalationKernel::ring ? "ring" : "disc";
+    return word_of(halation_kernel_field(), kernel);
+}
+
+const char* layer_image_name(LayerImage image) { return word_of(image_field(), image); }
+
+const char* cloud_profile_name(CloudProfile profile)
+{
+    return word_of(cloud_profile_field(), profile);
 }
 
 Status Stock::validate() const
@@ -381,6 +436,8 @@ std::string stock_to_json(const Stock& stock, int indent)
         for (const auto& f : kLayerFields)
             jl[f.key] = layer.*(f.member);
         jl["halation_kernel"] = halation_kernel_name(layer.halation_kernel);
+        jl["image"]           = layer_image_name(layer.image);
+        jl["cloud_profile"]   = cloud_profile_name(layer.cloud_profile);
         jl["populations"] = Json::array();
         for (const Population& pop : layer.populations) {
             Json jp;

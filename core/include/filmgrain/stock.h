@@ -43,6 +43,16 @@ inline constexpr double kRingInnerFraction = 0.75;
 
 const char* halation_kernel_name(HalationKernel kernel);
 
+/// What a layer's developed grains leave (MODEL.md 8): opaque silver discs
+/// (section 5), or clouds of dye whose densities add.
+enum class LayerImage { silver, dye };
+/// A dye cloud's profile: `disc`, uniform density inside its radius;
+/// `gaussian`, density exp(-2 (distance / radius)^2) of its peak.
+enum class CloudProfile { disc, gaussian };
+
+const char* layer_image_name(LayerImage image);
+const char* cloud_profile_name(CloudProfile profile);
+
 /// One emulsion layer: an output channel.
 struct Layer {
     /// Output channel name (non-empty, unique within the stock).
@@ -66,6 +76,15 @@ struct Layer {
     /// [0, 5000]; > 0 when halation > 0.
     double halation_radius_um = 0.0;
     HalationKernel halation_kernel = HalationKernel::disc;
+
+    /// MODEL.md 8: `silver` (opaque discs) or `dye` (clouds).
+    LayerImage image = LayerImage::silver;
+    /// For dye: the clouds' profile.
+    CloudProfile cloud_profile = CloudProfile::disc;
+    /// For dye: cloud radius over grain radius. Range [0.1, 10].
+    double cloud_diameter_ratio = 1.0;
+    /// For dye: a cloud's peak density. Range (0, 20].
+    double cloud_density = 1.0;
 
     /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
     /// without spread is rendered exactly as before the keys existed.

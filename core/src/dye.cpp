@@ -1,0 +1,236 @@
+// MODEL.md section 8: dye layers.
+#include "dye.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace filmgrain {
+
+namespace {
+
+/// Ein(k) = integral_0^k (1 - e^-t) / t dt = gamma + ln k + E1(k), with
+/// E1(k) = -Ei(-k) (std::expint is Ei); the series k - k^2/4 below 1e-6.
+double ein(double k)
+{
+    if (k < 1e-6)
+        return k - 0.25 * k * k;
+    constexpr double kEulerGamma = 0.57721566490153286;
+    return kEulerGamma + std::log(k) - std::expint(-k);
+}
+
+constexpr double kFixedPoint    = 4294967296.0;  // 2^32 per density unit
+constexpr double kLn10          = 2.302585092994046;
+
+/// Disc clouds: along each of `samples` rows per pixel row, D(x) is a
+/// whole number of clouds times cloud_density, constant between the
+/// clouds' chord ends, so 10^-D is integrated exactly along the row (a
+/// sweep over the sorted chord ends, cut at the pixel edges); only the
+/// integral across rows is sampled (the midpoint rule). Every piece a pixel
+/// sums lies between chord ends inside it or its own edges, in order: the
+/// same in every block.
+void disc_rows(const std::vector<Disc>& grains, const Layer& layer, double max_density,
+               int64_t x0, int64_t y0, int64_t x1, int64_t y1, double px_um, double py_um,
+               int samples, DyeScratch& scratch, double* transmittance)
+{
+    const int64_t tw = x1 - x0;
+    const int64_t s  = samples;
+    const double sy  = py_um / static_cast<double>(s);
+    const double left = static_cast<double>(x0) * px_um, right = static_cast<double>(x1) * px_um;
+    std::vector<std::pair<double, int>>& ends = scratch.ends;
+    std::vector<double>& level = scratch.level;  // 10^-min(k c, max) for k clouds
+    const auto transmittance_of = [&](int k) {
+        while (static_cast<int>(level.size()) <= k)
+            level.push_back(std::exp(
+                -kLn10 * std::min(static_cast<double>(level.size()) * layer.cloud_density,
+                                  max_density)));
+        return level[static_cast<size_t>(k)];
+    };
+    level.clear();
+    std::vector<double> sum(static_cast<size_t>(tw));
+    for (int64_t row = y0; row < y1; ++row) {
+        std::fill(sum.begin(), sum.end(), 0.0);
+        const size_t b = scratch.offsets[static_cast<size_t>(row - y0)];
+        const size_t e = scratch.offsets[static_cast<size_t>(row - y0 + 1)];
+        for (int64_t j = 0; j < s; ++j) {
+            const double y = (static_cast<double>(row * s + j) + 0.5) * sy;
+            ends.clear();
+            int count = 0;  // clouds covering the block's left edge
+            for (size_t m = b; m < e; ++m) {
+                const Disc& g   = grains[scratch.members[m]];
+                const double rc = layer.cloud_diameter_ratio * g.r_um;
+                const double dy = y - g.y_um;
+                if (std::fabs(dy) >= rc)
+                    continue;
+                const double half = std::sqrt(rc * rc - dy * dy);
+                const double a = g.x_um - half, c = g.x_um + half;
+                if (c <= left || a >= right)
+                    continue;
+                if (a <= left)
+                    ++count;
+                else
+                    ends.push_back({ a, +1 });
+                if (c < right)
+                    ends.push_back({ c, -1 });
+            }
+            std::sort(ends.begin(), ends.end());
+            ends.push_back({ right, 0 });
+            double x   = left;
+            int64_t ix = x0;  // the pixel holding x
+            for (const auto& [at, step] : ends) {
+                // [x, at) has `count` clouds: cut it at the pixel edges.
+                const double t = transmittance_of(count);
+                while (x < at) {
+                    const double edge = static_cast<double>(ix + 1) * px_um;
+                    const double to   = std::min(at, edge);
+                    sum[static_cast<size_t>(ix - x0)] += t * (to - x);
+                    x = to;
+                    if (to == edge && ix + 1 < x1)
+                        ++ix;
+                    else if (to == edge)
+                        break;
+                }
+                x = std::max(x, at);
+                count += step;
+            }
+        }
+        for (int64_t ix = 0; ix < tw; ++ix)
+            transmittance[static_cast<size_t>((row - y0) * tw + ix)]
+                = sum[static_cast<size_t>(ix)] / (px_um * static_cast<double>(s));
+    }
+}
+
+}  // namespace
+
+double image_reach_factor(const Layer& layer)
+{
+    if (layer.image == LayerImage::silver)
+        return 1.0;
+    return layer.cloud_diameter_ratio
+           * (layer.cloud_profile == CloudProfile::gaussian ? kGaussianCloudReach : 1.0);
+}
+
+double cloud_area_factor(const Layer& layer)
+{
+    if (layer.image == LayerImage::silver)
+        return 1.0;
+    const double r2 = layer.cloud_diameter_ratio * layer.cloud_diameter_ratio;
+    if (layer.cloud_profile == CloudProfile::disc)
+        return r2 * -std::expm1(-layer.cloud_density * kLn10);
+    return r2 * 0.5 * ein(layer.cloud_density * kLn10);
+}
+
+void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, double max_density,
+                       int64_t x0, int64_t y0, int64_t x1, int64_t y1, double px_um,
+                       double py_um, int samples, DyeScratch& scratch, double* transmittance)
+{
+    const int64_t tw = x1 - x0, th = y1 - y0;
+    const int64_t s  = samples;
+    const bool gaussian = layer.cloud_profile == CloudProfile::gaussian;
+    const double reach  = image_reach_factor(layer);
+    const double peak   = layer.cloud_density;
+    const auto disc_share = static_cast<int64_t>(std::llround(peak * kFixedPoint));
+
+    // Bucket the clouds by the pixel rows they reach (counting sort).
+    std::vector<size_t>& offsets = scratch.offsets;
+    std::vector<size_t>& fill    = scratch.fill;
+    std::vector<size_t>& members = scratch.members;
+    offsets.assign(static_cast<size_t>(th + 1), 0);
+    const auto rows = [&](const Disc& g, int64_t& r0, int64_t& r1) {
+        const double extent = reach * g.r_um;
+        r0 = std::max<int64_t>(y0, static_cast<int64_t>(std::floor((g.y_um - extent) / py_um)));
+        r1 = std::min<int64_t>(y1 - 1, static_cast<int64_t>(std::floor((g.y_um + extent) / py_um)));
+    };
+    for (const Disc& g : grains) {
+        int64_t r0, r1;
+        rows(g, r0, r1);
+        for (int64_t r = r0; r <= r1; ++r)
+            ++offsets[static_cast<size_t>(r - y0 + 1)];
+    }
+    for (size_t i = 1; i < offsets.size(); ++i)
+        offsets[i] += offsets[i - 1];
+    members.resize(offsets.back());
+    fill.assign(offsets.begin(), offsets.end() - 1);
+    for (size_t i = 0; i < grains.size(); ++i) {
+        int64_t r0, r1;
+        rows(grains[i], r0, r1);
+        for (int64_t r = r0; r <= r1; ++r)
+            members[fill[static_cast<size_t>(r - y0)]++] = i;
+    }
+
+    if (!gaussian) {
+        disc_rows(grains, layer, max_density, x0, y0, x1, y1, px_um, py_um, samples, scratch,
+                  transmittance);
+        return;
+    }
+
+    // Gaussian clouds, per pixel row: the density at its s x (tw s) sample
+    // points, then the mean of 10^-D per pixel.
+    const int64_t width = tw * s;
+    std::vector<int64_t>& density = scratch.density;
+    density.resize(static_cast<size_t>(width * s));
+    const double sx = px_um / static_cast<double>(s), sy = py_um / static_cast<double>(s);
+    // Sample columns by absolute index (x0 s + i), so that every block
+    // computes a sample's position, and so its sum, the same way.
+    const int64_t first = x0 * s;
+    for (int64_t row = y0; row < y1; ++row) {
+        std::fill(density.begin(), density.end(), 0);
+        const size_t b = offsets[static_cast<size_t>(row - y0)];
+        const size_t e = offsets[static_cast<size_t>(row - y0 + 1)];
+        for (size_t m = b; m < e; ++m) {
+            const Disc& g        = grains[members[m]];
+            const double rc      = layer.cloud_diameter_ratio * g.r_um;
+            const double extent  = reach * g.r_um;
+            const double inv_rc2 = 1.0 / (rc * rc);
+            // The profile is separable: peak exp(-2 dx^2 / rc^2) times
+            // exp(-2 dy^2 / rc^2), each factor computed once per column and
+            // per row of the cloud (the same in every block: both depend on
+            // the absolute sample index only).
+            const int64_t c0 = std::max<int64_t>(
+                0, static_cast<int64_t>(std::ceil((g.x_um - extent) / sx - 0.5)) - first);
+            const int64_t c1 = std::min<int64_t>(
+                width - 1, static_cast<int64_t>(std::floor((g.x_um + extent) / sx - 0.5)) - first);
+            if (c0 > c1)
+                continue;
+            std::vector<double>& ex = scratch.factor;
+            ex.resize(static_cast<size_t>(c1 - c0 + 1));
+            for (int64_t i = c0; i <= c1; ++i) {
+                const double dx = (static_cast<double>(first + i) + 0.5) * sx - g.x_um;
+                ex[static_cast<size_t>(i - c0)] = peak * kFixedPoint * std::exp(-2.0 * dx * dx * inv_rc2);
+            }
+            for (int64_t j = 0; j < s; ++j) {
+                const double y  = (static_cast<double>(row * s + j) + 0.5) * sy;
+                const double dy = y - g.y_um;
+                if (std::fabs(dy) >= extent)
+                    continue;
+                const double half = std::sqrt(extent * extent - dy * dy);
+                const double ey   = std::exp(-2.0 * dy * dy * inv_rc2);
+                // Sample columns a (absolute) with centre (a + 0.5) sx in
+                // [g.x - half, g.x + half].
+                const int64_t i0 = std::max<int64_t>(
+                    c0, static_cast<int64_t>(std::ceil((g.x_um - half) / sx - 0.5)) - first);
+                const int64_t i1 = std::min<int64_t>(
+                    c1, static_cast<int64_t>(std::floor((g.x_um + half) / sx - 0.5)) - first);
+                int64_t* d = density.data() + j * width;
+                for (int64_t i = i0; i <= i1; ++i)
+                    d[i] += static_cast<int64_t>(ex[static_cast<size_t>(i - c0)] * ey + 0.5);
+            }
+        }
+        for (int64_t ix = 0; ix < tw; ++ix) {
+            double sum = 0.0;
+            for (int64_t j = 0; j < s; ++j)
+                for (int64_t i = ix * s; i < (ix + 1) * s; ++i) {
+                    const int64_t di = density[static_cast<size_t>(j * width + i)];
+                    if (di == 0) {  // no cloud here
+                        sum += 1.0;
+                        continue;
+                    }
+                    const double dd = std::min(static_cast<double>(di) / kFixedPoint, max_density);
+                    sum += std::exp(-kLn10 * dd);
+                }
+            transmittance[static_cast<size_t>((row - y0) * tw + ix)]
+                = sum / static_cast<double>(s * s);
+        }
+    }
+}
+
+}  // namespace filmgrain

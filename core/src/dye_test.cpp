@@ -1,0 +1,314 @@
+// Tests of MODEL.md 8 (dye layers): the clouds' blocking area, the sampled
+// image of one cloud, uniform patches against the expected value, the
+// silver limit, the sampling's convergence, and determinism.
+#include "dye.h"
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "filmgrain/expected_curve.h"
+#include "filmgrain/render.h"
+
+namespace filmgrain {
+namespace {
+
+/// integral over the plane of (1 - 10^-D_1(x)) over the grain's area, by
+/// the midpoint rule in the radius (20000 steps to the cloud's reach).
+double blocking_numeric(const Layer& layer)
+{
+    const double r = 1.0, rc = layer.cloud_diameter_ratio * r;
+    const double reach = layer.cloud_profile == CloudProfile::gaussian ? 6.0 * rc : rc;
+    const int n = 20000;
+    double sum  = 0.0;
+    for (int i = 0; i < n; ++i) {
+        const double rho = (i + 0.5) * reach / n;
+        const double d   = layer.cloud_density
+                         * (layer.cloud_profile == CloudProfile::gaussian
+                                ? std::exp(-2.0 * rho * rho / (rc * rc))
+                                : 1.0);
+        sum += (1.0 - std::pow(10.0, -d)) * 2.0 * M_PI * rho * reach / n;
+    }
+    return sum / (M_PI * r * r);
+}
+
+TEST(Dye, StockKeys)
+{
+    Stock s;
+    ASSERT_TRUE(parse_stock_json(R"({"layers": [{"name": "Y", "image": "dye",
+        "cloud_profile": "gaussian", "cloud_diameter_ratio": 1.5, "cloud_density": 0.7}]})",
+                                 "t", s));
+    EXPECT_EQ(s.layers[0].image, LayerImage::dye);
+    EXPECT_EQ(s.layers[0].cloud_profile, CloudProfile::gaussian);
+    EXPECT_EQ(s.layers[0].cloud_diameter_ratio, 1.5);
+    EXPECT_EQ(s.layers[0].cloud_density, 0.7);
+    Stock back;
+    ASSERT_TRUE(parse_stock_json(stock_to_json(s), "round trip", back));
+    EXPECT_EQ(stock_to_json(back), stock_to_json(s));
+    const auto error = [](const std::string& text) {
+        Stock out;
+        const Status st = parse_stock_json(text, "t", out);
+        EXPECT_FALSE(st) << text;
+        return st.message();
+    };
+    EXPECT_NE(error(R"({"layers": [{"image": "colour"}]})")
+                  .find("layers[0].image = 'colour': must be one of 'silver', 'dye'"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"layers": [{"cloud_profile": "box"}]})").find("'disc', 'gaussian'"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"layers": [{"cloud_density": 0}]})").find("cloud_density = 0"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"layers": [{"cloud_diameter_ratio": 11}]})").find("cloud_diameter_ratio = 11: must be in"),
+              std::string::npos);
+}
+
+TEST(Dye, CloudAreaFactorIsTheBlockingIntegral)
+{
+    Layer silver;
+    EXPECT_EQ(cloud_area_factor(silver), 1.0);
+    EXPECT_EQ(image_reach_factor(silver), 1.0);
+    for (CloudProfile profile : { CloudProfile::disc, CloudProfile::gaussian })
+        for (double ratio : { 0.5, 1.0, 2.5 })
+            for (double density : { 1e-7, 0.05, 0.7, 3.0, 20.0 }) {
+                Layer l;
+                l.image                = LayerImage::dye;
+                l.cloud_profile        = profile;
+                l.cloud_diameter_ratio = ratio;
+                l.cloud_density        = density;
+                const double expected  = blocking_numeric(l);
+                EXPECT_NEAR(cloud_area_factor(l), expected, 1e-6 * expected + 1e-12)
+                    << cloud_profile_name(profile) << " ratio " << ratio << " density " << density;
+            }
+}
+
+TEST(Dye, OneCloudInAPixel)
+{
+    // One gaussian cloud in the middle of a 20 um pixel: the sampled mean of
+    // 10^-D against the blocking integral (the cloud lies well inside).
+    Layer l;
+    l.image                = LayerImage::dye;
+    l.cloud_profile        = CloudProfile::gaussian;
+    l.cloud_diameter_ratio = 1.5;
+    l.cloud_density        = 0.8;
+    const std::vector<Disc> grains = { { 10.0, 10.0, 1.0 } };
+    DyeScratch scratch;
+    double t_coarse = 0.0, t_fine = 0.0;
+    dye_transmittance(grains, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 64, scratch, &t_coarse);
+    dye_transmittance(grains, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 256, scratch, &t_fine);
+    const double expected = 1.0 - cloud_area_factor(l) * M_PI / 400.0;
+    // The midpoint rule on a smooth cloud: error ~ (spacing / radius)^2.
+    EXPECT_NEAR(t_fine, expected, 1e-5);
+    EXPECT_NEAR(t_coarse, expected, 1e-4);
+}
+
+struct Scene {
+    Stock stock;
+    SceneSettings scene;
+    std::vector<float> pixels;
+    ImageView view;
+};
+
+/// The paper preset as a dye layer, on a 1.2 mm square of 12.5 um input
+/// pixels at `value` (scene-linear).
+Scene dye_scene(CloudProfile profile, double ratio, double density, float value)
+{
+    Scene s;
+    EXPECT_TRUE(load_stock("paper", s.stock));
+    Layer& l               = s.stock.layers[0];
+    l.image                = LayerImage::dye;
+    l.cloud_profile        = profile;
+    l.cloud_diameter_ratio = ratio;
+    l.cloud_density        = density;
+    s.scene.frame_width_mm = 1.2;
+    s.pixels.assign(96 * 96, value);
+    s.view = ImageView { s.pixels.data(), 96, 96, 1 };
+    return s;
+}
+
+std::vector<float> render(const Scene& s, const RenderSettings& settings,
+                          RenderStats* stats = nullptr)
+{
+    ScanGeometry scan;
+    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, settings, scan));
+    const Roi roi = settings.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : settings.roi;
+    std::vector<float> out(static_cast<size_t>(roi.npixels()) * s.stock.layers.size(), -1.0f);
+    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), stats);
+    EXPECT_TRUE(st) << st.message();
+    return out;
+}
+
+/// Mean transmittance of a render and its standard error (pixels in 4x4
+/// blocks as the unit: clouds span neighbouring pixels).
+std::pair<double, double> mean_transmittance(const std::vector<float>& d, int64_t n)
+{
+    std::vector<double> blocks;
+    for (int64_t by = 0; by < n; by += 4)
+        for (int64_t bx = 0; bx < n; bx += 4) {
+            double t = 0.0;
+            for (int64_t y = by; y < by + 4; ++y)
+                for (int64_t x = bx; x < bx + 4; ++x)
+                    t += std::pow(10.0, -d[static_cast<size_t>(y * n + x)]);
+            blocks.push_back(t / 16.0);
+        }
+    double mean = 0.0, var = 0.0;
+    for (double b : blocks)
+        mean += b;
+    mean /= blocks.size();
+    for (double b : blocks)
+        var += (b - mean) * (b - mean);
+    return { mean, std::sqrt(var / (blocks.size() - 1) / blocks.size()) };
+}
+
+TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
+{
+    // MODEL.md 8: E[T] = exp(-sum n E[P a] * cloud_area_factor), i.e. the
+    // expected curve of the dye layer; within 4 standard errors plus the
+    // curve's error bound (as a transmittance). Exact engine and auto, both
+    // profiles, clouds smaller and larger than the grain. The frame's edge
+    // (grains outside the frame have no light) stays out of the mean: all
+    // grains reaching it are inside (the margins are outside the pixels).
+    struct Case {
+        CloudProfile profile;
+        double ratio, density;
+        Engine engine;
+    };
+    for (const Case& c : { Case { CloudProfile::disc, 1.0, 0.6, Engine::exact },
+                           Case { CloudProfile::gaussian, 1.5, 0.8, Engine::exact },
+                           Case { CloudProfile::disc, 0.7, 1.5, Engine::automatic },
+                           Case { CloudProfile::gaussian, 2.0, 0.4, Engine::automatic } }) {
+        const Scene s = dye_scene(c.profile, c.ratio, c.density, 0.18f);
+        RenderSettings settings;
+        settings.engine = c.engine;
+        const auto [mean, se] = mean_transmittance(render(s, settings), 96);
+        std::vector<ExpectedCurve> curves;
+        ASSERT_TRUE(expected_curves(s.stock, s.scene, ExpectedCurveOptions {}, curves));
+        const double t = curves[0].transmittance_at(0.18);
+        const double t_error = t * std::log(10.0) * curves[0].density_error;
+        EXPECT_LT(std::fabs(mean - t), 4.0 * se + t_error)
+            << cloud_profile_name(c.profile) << " ratio " << c.ratio << " " << engine_name(c.engine)
+            << ": measured " << mean << " +- " << se << ", expected " << t;
+    }
+}
+
+TEST(Dye, TheSilverLimitIsSilver)
+{
+    // Disc clouds of the grain's size and a density far above max_density
+    // cover as opaque discs do: the same grains (same seed and layer) give
+    // per pixel the silver transmittance, to the dye's sampling across rows
+    // (the exact engine's 34 rows in a 12.5 um pixel for 6 um grains) and
+    // the 10^-4 a covered point keeps.
+    Scene dye     = dye_scene(CloudProfile::disc, 1.0, 20.0, 0.18f);
+    Scene silver  = dye;
+    silver.stock.layers[0].image = LayerImage::silver;
+    RenderSettings exact;
+    exact.engine = Engine::exact;
+    const auto a = render(dye, exact), b = render(silver, exact);
+    double rms = 0.0;
+    std::vector<double> blocks;
+    for (int64_t by = 0; by < 96; by += 4)
+        for (int64_t bx = 0; bx < 96; bx += 4) {
+            double block = 0.0;
+            for (int64_t y = by; y < by + 4; ++y)
+                for (int64_t x = bx; x < bx + 4; ++x) {
+                    const size_t i  = static_cast<size_t>(y * 96 + x);
+                    const double tb = std::pow(10.0, -b[i]);
+                    // The uncovered fraction (silver clamps T at 10^-4: a
+                    // pixel at the clamp is taken as fully covered) and
+                    // what the dye makes of it: covered points keep 10^-4.
+                    const double open = tb > 1.0001e-4 ? tb : 0.0;
+                    const double d    = std::pow(10.0, -a[i]) - (open + 1e-4 * (1.0 - open));
+                    block += d / 16.0;
+                    rms += d * d;
+                }
+            blocks.push_back(block);
+        }
+    const double n = 96.0 * 96.0;
+    rms            = std::sqrt(rms / n);
+    EXPECT_LT(rms, 0.05);
+    // The sampling is unbiased (grain centres are uniform relative to the
+    // rows): the mean difference is 0 within 4 standard errors (4x4 blocks
+    // as the unit).
+    double mean = 0.0, var = 0.0;
+    for (double v : blocks)
+        mean += v;
+    mean /= blocks.size();
+    for (double v : blocks)
+        var += (v - mean) * (v - mean);
+    const double se = std::sqrt(var / (blocks.size() - 1) / blocks.size());
+    EXPECT_LT(std::fabs(mean), 4.0 * se) << mean << " +- " << se;
+}
+
+TEST(Dye, BitIdenticalForThreadsTilesAndRois)
+{
+    // Gaussian clouds 2.5 grain radii wide (reaching 7.5 radii): grains of
+    // neighbouring tiles and outside a ROI paint into it.
+    Scene s = dye_scene(CloudProfile::gaussian, 2.5, 0.5, 0.18f);
+    for (size_t i = 0; i < s.pixels.size(); ++i)
+        s.pixels[i] = static_cast<float>(0.18 * std::exp2((static_cast<double>(i % 96) - 48) / 12));
+    for (Engine engine : { Engine::exact, Engine::automatic }) {
+        RenderSettings one;
+        one.engine       = engine;
+        one.nthreads     = 1;
+        one.tile_size_px = 64;
+        RenderSettings two = one;
+        two.nthreads       = 2;
+        two.tile_size_px   = 7;
+        const auto a = render(s, one), b = render(s, two);
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0)
+            << engine_name(engine);
+        RenderSettings part = two;
+        part.roi            = Roi { 30, 40, 47, 61 };
+        const auto crop     = render(s, part);
+        for (int64_t y = 40; y < 61; ++y)
+            for (int64_t x = 30; x < 47; ++x)
+                ASSERT_EQ(a[static_cast<size_t>(y * 96 + x)],
+                          crop[static_cast<size_t>((y - 40) * 17 + (x - 30))])
+                    << engine_name(engine) << " " << x << "," << y;
+    }
+}
+
+TEST(Dye, SamplingConverges)
+{
+    // The same grains (auto: the fast kernel) imaged at auto's samples and
+    // at 64 x 64 per pixel: the per-pixel density difference shrinks as the
+    // samples grow, and auto's is reported in its stats' path.
+    const Scene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
+    RenderSettings fine;
+    fine.coverage_samples = 64;
+    const auto ref        = render(s, fine);
+    double previous       = 1e300;
+    for (int samples : { 2, 4, 8, 16 }) {
+        RenderSettings settings;
+        settings.coverage_samples = samples;
+        const auto d              = render(s, settings);
+        double rms                = 0.0;
+        for (size_t i = 0; i < d.size(); ++i)
+            rms += (d[i] - ref[i]) * (d[i] - ref[i]);
+        rms = std::sqrt(rms / d.size());
+        RecordProperty("rms_density_difference_at_" + std::to_string(samples),
+                       std::to_string(rms));
+        EXPECT_LT(rms, previous) << samples;
+        previous = rms;
+    }
+    RenderStats stats;
+    render(s, RenderSettings {}, &stats);
+    EXPECT_NE(stats.layers[0].path.find("image=dye:"), std::string::npos) << stats.layers[0].path;
+}
+
+TEST(Dye, PixelScaleRefusesDye)
+{
+    const Scene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
+    RenderSettings settings;
+    settings.scale = ScaleMethod::pixel;
+    std::vector<float> out(96 * 96);
+    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("dye clouds"), std::string::npos) << st.message();
+}
+
+}  // namespace
+}  // namespace filmgrain
