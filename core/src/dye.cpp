@@ -18,8 +18,8 @@ double ein(double k)
     return kEulerGamma + std::log(k) - std::expint(-k);
 }
 
-constexpr double kFixedPoint    = 4294967296.0;  // 2^32 per density unit
-constexpr double kLn10          = 2.302585092994046;
+constexpr double kFixedPoint = 4294967296.0;  // 2^32 per density unit
+constexpr double kLn10       = 2.302585092994046;
 
 /// Disc clouds: along each of `samples` rows per pixel row, D(x) is a
 /// whole number of clouds times cloud_density, constant between the
@@ -128,7 +128,6 @@ void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, doub
     const bool gaussian = layer.cloud_profile == CloudProfile::gaussian;
     const double reach  = image_reach_factor(layer);
     const double peak   = layer.cloud_density;
-    const auto disc_share = static_cast<int64_t>(std::llround(peak * kFixedPoint));
 
     // Bucket the clouds by the pixel rows they reach (counting sort).
     std::vector<size_t>& offsets = scratch.offsets;

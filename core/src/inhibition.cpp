@@ -53,16 +53,22 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         const size_t j = static_cast<size_t>(jj);
         if (!donor[j])
             return;
+        // Beyond the frame the film is unexposed: its density is the fog's.
+        // The blur acts on the density above the fog (0 outside the frame,
+        // as spread_frame takes it), the fog added back after.
+        const double fog = curves[j].min_density() - curves[j].base_density;
         std::vector<double> d(n);
         for (int64_t y = 0; y < frame_height; ++y)
             for (int64_t x = 0; x < frame_width; ++x)
                 d[static_cast<size_t>(y * frame_width + x)]
-                    = curves[j].density_at(exposures[j]->value(x, y)) - curves[j].base_density;
-        blurred[j] = stock.inhibitor_diffusion_um > 0.0
-                         ? spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
-                                        stock.inhibitor_diffusion_um, 0.0, 0.0,
-                                        HalationKernel::disc)
-                         : std::move(d);
+                    = curves[j].density_at(exposures[j]->value(x, y)) - curves[j].base_density
+                      - fog;
+        if (stock.inhibitor_diffusion_um > 0.0)
+            d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
+                             stock.inhibitor_diffusion_um, 0.0, 0.0, HalationKernel::disc);
+        for (double& v : d)
+            v += fog;
+        blurred[j] = std::move(d);
     });
 
     for (size_t k = 0; k < nl; ++k) {

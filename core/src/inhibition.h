@@ -51,7 +51,8 @@ struct FramePlane {
 /// expected developed density (its expected curve without inhibition, less
 /// the base density) at each input pixel's exposure value, blurred by the
 /// normalised Gaussian of standard deviation inhibitor_diffusion_um
-/// (spread_frame: exact pixel means, over the whole frame). `exposures[j]`
+/// (spread_frame: exact pixel means, over the whole frame; beyond the frame
+/// the film is unexposed and its density the fog's). `exposures[j]`
 /// gives layer j's exposure value (after its light spread) over the whole
 /// frame. A layer whose row is all zero gets no plane (null).
 struct InhibitionPlan {

@@ -157,6 +157,12 @@ PixelKernel halation_pixel_kernel(HalationKernel kernel, double radius_um, doubl
     const double outer = radius_um;
     const double inner = kernel == HalationKernel::ring ? kRingInnerFraction * radius_um : 0.0;
     PixelKernel k;
+    if (outer < 1e-6 * p) {
+        // Far below a pixel the kernel is a point: its pixel weights are
+        // the identity (and the shape's area would underflow).
+        k.weights = { 1.0 };
+        return k;
+    }
     k.reach        = static_cast<int64_t>(std::ceil(outer / p)) + 1;
     const int64_t n = 2 * k.reach + 1;
     k.weights.assign(static_cast<size_t>(n * n), 0.0);
