@@ -4,7 +4,6 @@
 #include "dye.h"
 
 #include <cmath>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -12,6 +11,7 @@
 
 #include "filmgrain/expected_curve.h"
 #include "filmgrain/render.h"
+#include "test_render.h"
 
 namespace filmgrain {
 namespace {
@@ -104,18 +104,11 @@ TEST(Dye, OneCloudInAPixel)
     EXPECT_NEAR(t_coarse, expected, 1e-4);
 }
 
-struct Scene {
-    Stock stock;
-    SceneSettings scene;
-    std::vector<float> pixels;
-    ImageView view;
-};
-
 /// The paper preset as a dye layer, on a 1.2 mm square of 12.5 um input
 /// pixels at `value` (scene-linear).
-Scene dye_scene(CloudProfile profile, double ratio, double density, float value)
+TestScene dye_scene(CloudProfile profile, double ratio, double density, float value)
 {
-    Scene s;
+    TestScene s;
     EXPECT_TRUE(load_stock("paper", s.stock));
     Layer& l               = s.stock.layers[0];
     l.image                = LayerImage::dye;
@@ -126,18 +119,6 @@ Scene dye_scene(CloudProfile profile, double ratio, double density, float value)
     s.pixels.assign(96 * 96, value);
     s.view = ImageView { s.pixels.data(), 96, 96, 1 };
     return s;
-}
-
-std::vector<float> render(const Scene& s, const RenderSettings& settings,
-                          RenderStats* stats = nullptr)
-{
-    ScanGeometry scan;
-    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, settings, scan));
-    const Roi roi = settings.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : settings.roi;
-    std::vector<float> out(static_cast<size_t>(roi.npixels()) * s.stock.layers.size(), -1.0f);
-    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), stats);
-    EXPECT_TRUE(st) << st.message();
-    return out;
 }
 
 /// Mean transmittance of a render and its standard error (pixels in 4x4
@@ -153,13 +134,7 @@ std::pair<double, double> mean_transmittance(const std::vector<float>& d, int64_
                     t += std::pow(10.0, -d[static_cast<size_t>(y * n + x)]);
             blocks.push_back(t / 16.0);
         }
-    double mean = 0.0, var = 0.0;
-    for (double b : blocks)
-        mean += b;
-    mean /= blocks.size();
-    for (double b : blocks)
-        var += (b - mean) * (b - mean);
-    return { mean, std::sqrt(var / (blocks.size() - 1) / blocks.size()) };
+    return mean_and_standard_error(blocks);
 }
 
 TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
@@ -179,10 +154,10 @@ TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
                            Case { CloudProfile::gaussian, 1.5, 0.8, Engine::exact },
                            Case { CloudProfile::disc, 0.7, 1.5, Engine::automatic },
                            Case { CloudProfile::gaussian, 2.0, 0.4, Engine::automatic } }) {
-        const Scene s = dye_scene(c.profile, c.ratio, c.density, 0.18f);
+        const TestScene s = dye_scene(c.profile, c.ratio, c.density, 0.18f);
         RenderSettings settings;
         settings.engine = c.engine;
-        const auto [mean, se] = mean_transmittance(render(s, settings), 96);
+        const auto [mean, se] = mean_transmittance(render_scene(s, settings), 96);
         std::vector<ExpectedCurve> curves;
         ASSERT_TRUE(expected_curves(s.stock, s.scene, ExpectedCurveOptions {}, curves));
         const double t = curves[0].transmittance_at(0.18);
@@ -200,12 +175,12 @@ TEST(Dye, TheSilverLimitIsSilver)
     // per pixel the silver transmittance, to the dye's sampling across rows
     // (the exact engine's 34 rows in a 12.5 um pixel for 6 um grains) and
     // the 10^-4 a covered point keeps.
-    Scene dye     = dye_scene(CloudProfile::disc, 1.0, 20.0, 0.18f);
-    Scene silver  = dye;
+    TestScene dye    = dye_scene(CloudProfile::disc, 1.0, 20.0, 0.18f);
+    TestScene silver = dye;
     silver.stock.layers[0].image = LayerImage::silver;
     RenderSettings exact;
     exact.engine = Engine::exact;
-    const auto a = render(dye, exact), b = render(silver, exact);
+    const auto a = render_scene(dye, exact), b = render_scene(silver, exact);
     double rms = 0.0;
     std::vector<double> blocks;
     for (int64_t by = 0; by < 96; by += 4)
@@ -231,13 +206,7 @@ TEST(Dye, TheSilverLimitIsSilver)
     // The sampling is unbiased (grain centres are uniform relative to the
     // rows): the mean difference is 0 within 4 standard errors (4x4 blocks
     // as the unit).
-    double mean = 0.0, var = 0.0;
-    for (double v : blocks)
-        mean += v;
-    mean /= blocks.size();
-    for (double v : blocks)
-        var += (v - mean) * (v - mean);
-    const double se = std::sqrt(var / (blocks.size() - 1) / blocks.size());
+    const auto [mean, se] = mean_and_standard_error(blocks);
     EXPECT_LT(std::fabs(mean), 4.0 * se) << mean << " +- " << se;
 }
 
@@ -245,30 +214,11 @@ TEST(Dye, BitIdenticalForThreadsTilesAndRois)
 {
     // Gaussian clouds 2.5 grain radii wide (reaching 7.5 radii): grains of
     // neighbouring tiles and outside a ROI paint into it.
-    Scene s = dye_scene(CloudProfile::gaussian, 2.5, 0.5, 0.18f);
+    TestScene s = dye_scene(CloudProfile::gaussian, 2.5, 0.5, 0.18f);
     for (size_t i = 0; i < s.pixels.size(); ++i)
         s.pixels[i] = static_cast<float>(0.18 * std::exp2((static_cast<double>(i % 96) - 48) / 12));
-    for (Engine engine : { Engine::exact, Engine::automatic }) {
-        RenderSettings one;
-        one.engine       = engine;
-        one.nthreads     = 1;
-        one.tile_size_px = 64;
-        RenderSettings two = one;
-        two.nthreads       = 2;
-        two.tile_size_px   = 7;
-        const auto a = render(s, one), b = render(s, two);
-        ASSERT_EQ(a.size(), b.size());
-        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0)
-            << engine_name(engine);
-        RenderSettings part = two;
-        part.roi            = Roi { 30, 40, 47, 61 };
-        const auto crop     = render(s, part);
-        for (int64_t y = 40; y < 61; ++y)
-            for (int64_t x = 30; x < 47; ++x)
-                ASSERT_EQ(a[static_cast<size_t>(y * 96 + x)],
-                          crop[static_cast<size_t>((y - 40) * 17 + (x - 30))])
-                    << engine_name(engine) << " " << x << "," << y;
-    }
+    for (Engine engine : { Engine::exact, Engine::automatic })
+        expect_deterministic(s, engine, Roi { 30, 40, 47, 61 });
 }
 
 TEST(Dye, SamplingConverges)
@@ -276,15 +226,15 @@ TEST(Dye, SamplingConverges)
     // The same grains (auto: the fast kernel) imaged at auto's samples and
     // at 64 x 64 per pixel: the per-pixel density difference shrinks as the
     // samples grow, and auto's is reported in its stats' path.
-    const Scene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
+    const TestScene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
     RenderSettings fine;
     fine.coverage_samples = 64;
-    const auto ref        = render(s, fine);
+    const auto ref        = render_scene(s, fine);
     double previous       = 1e300;
     for (int samples : { 2, 4, 8, 16 }) {
         RenderSettings settings;
         settings.coverage_samples = samples;
-        const auto d              = render(s, settings);
+        const auto d              = render_scene(s, settings);
         double rms                = 0.0;
         for (size_t i = 0; i < d.size(); ++i)
             rms += (d[i] - ref[i]) * (d[i] - ref[i]);
@@ -295,13 +245,13 @@ TEST(Dye, SamplingConverges)
         previous = rms;
     }
     RenderStats stats;
-    render(s, RenderSettings {}, &stats);
+    render_scene(s, RenderSettings {}, &stats);
     EXPECT_NE(stats.layers[0].path.find("image=dye:"), std::string::npos) << stats.layers[0].path;
 }
 
 TEST(Dye, PixelScaleRefusesDye)
 {
-    const Scene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
+    const TestScene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
     RenderSettings settings;
     settings.scale = ScaleMethod::pixel;
     std::vector<float> out(96 * 96);

@@ -4,13 +4,13 @@
 #include "inhibition.h"
 
 #include <cmath>
-#include <cstring>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "filmgrain/expected_curve.h"
 #include "filmgrain/render.h"
+#include "test_render.h"
 
 namespace filmgrain {
 namespace {
@@ -56,22 +56,15 @@ TEST(Inhibition, StockKeys)
 constexpr int64_t kWidth = 384, kHeight = 192;
 constexpr double kPitchUm = 6.25;
 
-struct Scene {
-    Stock stock;
-    SceneSettings scene;
-    std::vector<float> pixels;
-    ImageView view;
-};
-
 /// The paper preset with grains a third its diameter, nine times as many
 /// and nine times the exposure (the same coverage and photons per grain:
 /// the same curve, with a third of the noise) on a 2.4 mm wide frame, `rows` high, of
 /// 6.25 um input pixels: the left half 1 stop under grey, the right half 3
 /// stops over (a step edge at x = 1.2 mm); self-inhibition `strength`,
 /// diffusion `sigma_um`.
-Scene edge_scene(double strength, double sigma_um, int64_t rows)
+TestScene edge_scene(double strength, double sigma_um, int64_t rows)
 {
-    Scene s;
+    TestScene s;
     EXPECT_TRUE(load_stock("paper", s.stock));
     Population& pop = s.stock.layers[0].populations[0];
     pop.diameter_um /= 3.0;
@@ -88,22 +81,6 @@ Scene edge_scene(double strength, double sigma_um, int64_t rows)
             s.pixels[static_cast<size_t>(y * w + x)] = static_cast<float>(0.18 * (x < w / 2 ? 0.5 : 8.0));
     s.view = ImageView { s.pixels.data(), w, h, 1 };
     return s;
-}
-
-std::vector<float> render(const Scene& s, const RenderSettings& settings)
-{
-    ScanGeometry scan;
-    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, settings, scan));
-    const Roi roi = settings.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : settings.roi;
-    std::vector<float> out(static_cast<size_t>(roi.npixels()) * s.stock.layers.size(), -1.0f);
-    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
-    EXPECT_TRUE(st) << st.message();
-    return out;
-}
-
-bool bit_identical(const std::vector<float>& a, const std::vector<float>& b)
-{
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
 /// Mean transmittance (10^-density: linear in the developed grains, unlike
@@ -130,14 +107,7 @@ std::pair<double, double> band(const std::vector<float>& d, double d0_um, double
             }
         blocks.push_back(s / n);
     }
-    double mean = 0.0, var = 0.0;
-    for (double b : blocks)
-        mean += b;
-    mean /= blocks.size();
-    for (double b : blocks)
-        var += (b - mean) * (b - mean);
-    var /= blocks.size() - 1;
-    return { mean, std::sqrt(var / blocks.size()) };
+    return mean_and_standard_error(blocks);
 }
 
 double z(std::pair<double, double> a, std::pair<double, double> b)
@@ -152,13 +122,13 @@ TEST(Inhibition, AStepEdgeOvershootsAndUndershoots)
     // transmittance) than far from it: overshoot; thin side: the reverse,
     // undershoot. Differences in standard errors of the band means (z).
     const double sigma = 60.0;
-    const auto d       = render(edge_scene(1.0, sigma, kHeight), RenderSettings {});
+    const auto d       = render_scene(edge_scene(1.0, sigma, kHeight), RenderSettings {});
     const auto dense_near = band(d, 0.0, sigma), dense_far = band(d, 4 * sigma, 6 * sigma);
     const auto thin_near = band(d, -sigma, 0.0), thin_far = band(d, -6 * sigma, -4 * sigma);
     EXPECT_GT(z(dense_far, dense_near), 5.0);
     EXPECT_GT(z(thin_near, thin_far), 5.0);
     // Without inhibition there is neither (the same bands agree).
-    const auto plain = render(edge_scene(0.0, sigma, kHeight), RenderSettings {});
+    const auto plain = render_scene(edge_scene(0.0, sigma, kHeight), RenderSettings {});
     EXPECT_LT(std::fabs(z(band(plain, 0.0, sigma), band(plain, 4 * sigma, 6 * sigma))), 3.5);
     EXPECT_LT(std::fabs(z(band(plain, -sigma, 0.0), band(plain, -6 * sigma, -4 * sigma))), 3.5);
 }
@@ -172,7 +142,7 @@ TEST(Inhibition, TheEdgeEffectsWidthIsTheDiffusions)
     // of the blur differ from the centre value by ~(p / sigma)^2 / 24 of
     // the curvature.
     for (double sigma : { 20.0, 60.0 }) {
-        const Scene s = edge_scene(1.0, sigma, 8);
+        const TestScene s = edge_scene(1.0, sigma, 8);
         const LayerExposure exposure(s.view, s.stock.layers[0].sensitivity, kPitchUm);
         InhibitionPlan plan;
         ASSERT_TRUE(plan_inhibition(s.stock, s.scene, { &exposure }, kWidth, 8, kPitchUm, 0, plan));
@@ -196,42 +166,25 @@ TEST(Inhibition, TheEdgeEffectsWidthIsTheDiffusions)
 TEST(Inhibition, ZeroInhibitionIsNone)
 {
     // An all-zero matrix (with a diffusion) is bit-identical to no keys.
-    Scene plain       = edge_scene(0.0, 0.0, 16);
-    Scene zero        = plain;
+    TestScene plain   = edge_scene(0.0, 0.0, 16);
+    TestScene zero    = plain;
     zero.stock.inhibition             = { { 0.0 } };
     zero.stock.inhibitor_diffusion_um = 40.0;
     for (Engine engine : { Engine::exact, Engine::automatic, Engine::fast }) {
         RenderSettings settings;
         settings.engine = engine;
-        EXPECT_TRUE(bit_identical(render(plain, settings), render(zero, settings)))
+        EXPECT_TRUE(bit_identical(render_scene(plain, settings), render_scene(zero, settings)))
             << engine_name(engine);
     }
 }
 
 TEST(Inhibition, BitIdenticalForThreadsTilesAndRois)
 {
-    const Scene s = edge_scene(1.0, 40.0, 32);
-    for (Engine engine : { Engine::exact, Engine::automatic }) {
-        RenderSettings one;
-        one.engine       = engine;
-        one.nthreads     = 1;
-        one.tile_size_px = 64;
-        RenderSettings two = one;
-        two.nthreads       = 2;
-        two.tile_size_px   = 9;
-        const auto a = render(s, one);
-        EXPECT_TRUE(bit_identical(a, render(s, two))) << engine_name(engine);
-        // A ROI on the dense side next to the edge: the blur reaches the
-        // thin side outside it.
-        RenderSettings part = two;
-        part.roi            = Roi { 194, 10, 207, 30 };
-        const auto crop     = render(s, part);
-        for (int64_t y = 10; y < 30; ++y)
-            for (int64_t x = 194; x < 207; ++x)
-                ASSERT_EQ(a[static_cast<size_t>(y * kWidth + x)],
-                          crop[static_cast<size_t>((y - 10) * 13 + (x - 194))])
-                    << engine_name(engine) << " " << x << "," << y;
-    }
+    // A ROI on the dense side next to the edge: the blur reaches the thin
+    // side outside it.
+    const TestScene s = edge_scene(1.0, 40.0, 32);
+    for (Engine engine : { Engine::exact, Engine::automatic })
+        expect_deterministic(s, engine, Roi { 194, 10, 207, 30 });
 }
 
 TEST(Inhibition, AUniformPatchHasTheInhibitedExpectedCurve)
@@ -242,10 +195,10 @@ TEST(Inhibition, AUniformPatchHasTheInhibitedExpectedCurve)
     // (pixels in blocks of 4x4 as the unit; 100 um from the frame's edges,
     // 5 diffusion widths) plus the curve's error bound;
     // and clearly below the curve without.
-    Scene s = edge_scene(1.0, 20.0, kHeight);
+    TestScene s = edge_scene(1.0, 20.0, kHeight);
     for (float& v : s.pixels)
         v = 0.18f;
-    const auto d = render(s, RenderSettings {});
+    const auto d = render_scene(s, RenderSettings {});
     std::vector<double> blocks;
     for (int64_t by = 16; by < kHeight - 16; by += 4)
         for (int64_t bx = 16; bx < kWidth - 16; bx += 4) {
@@ -255,13 +208,7 @@ TEST(Inhibition, AUniformPatchHasTheInhibitedExpectedCurve)
                     t += std::pow(10.0, -d[static_cast<size_t>(y * kWidth + x)]);
             blocks.push_back(t / 16);
         }
-    double mean = 0.0, var = 0.0;
-    for (double b : blocks)
-        mean += b;
-    mean /= blocks.size();
-    for (double b : blocks)
-        var += (b - mean) * (b - mean);
-    const double se = std::sqrt(var / (blocks.size() - 1) / blocks.size());
+    const auto [mean, se] = mean_and_standard_error(blocks);
 
     std::vector<ExpectedCurve> with, without;
     ASSERT_TRUE(expected_curves(s.stock, s.scene, ExpectedCurveOptions {}, with));

@@ -4,7 +4,6 @@
 #include "light_spread.h"
 
 #include <cmath>
-#include <cstring>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -13,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "filmgrain/render.h"
+#include "test_render.h"
 
 namespace filmgrain {
 namespace {
@@ -209,19 +209,12 @@ TEST(LightSpread, AKernelFarWiderThanThePixelsIsAnError)
 
 // Renders.
 
-struct Scene {
-    Stock stock;
-    SceneSettings scene;
-    std::vector<float> pixels;
-    ImageView view;
-};
-
 /// A dark frame (0.18 * 2^-6) with one input pixel 12 stops over grey in
 /// its middle, 1.2 mm wide in 12.5 um input pixels; the colour preset with
 /// halation (and scatter) on its red layer.
-Scene point_light_scene()
+TestScene point_light_scene()
 {
-    Scene s;
+    TestScene s;
     EXPECT_TRUE(load_stock("color-negative", s.stock));
     Layer& red             = s.stock.layers[0];
     red.halation           = 0.5;
@@ -236,47 +229,17 @@ Scene point_light_scene()
     return s;
 }
 
-std::vector<float> render(const Scene& s, const RenderSettings& settings)
-{
-    ScanGeometry scan;
-    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, settings, scan));
-    const Roi roi = settings.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : settings.roi;
-    std::vector<float> out(static_cast<size_t>(roi.npixels()) * s.stock.layers.size(), -1.0f);
-    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
-    EXPECT_TRUE(st) << st.message();
-    return out;
-}
-
-bool bit_identical(const std::vector<float>& a, const std::vector<float>& b)
-{
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
-
 TEST(LightSpread, RendersAreBitIdenticalForThreadsTilesAndRois)
 {
-    const Scene s = point_light_scene();
+    // A ROI beside the point: its halo (200 um = 16 pixels) reaches in
+    // from outside; it reads the whole frame (the spread is computed over
+    // it).
+    const TestScene s = point_light_scene();
+    const Roi roi { 50, 30, 70, 45 };
     for (Engine engine : { Engine::exact, Engine::automatic }) {
-        RenderSettings one;
-        one.engine       = engine;
-        one.nthreads     = 1;
-        one.tile_size_px = 64;
-        RenderSettings two = one;
-        two.nthreads       = 2;
-        two.tile_size_px   = 7;
-        const auto a = render(s, one);
-        EXPECT_TRUE(bit_identical(a, render(s, two))) << engine_name(engine);
-        // A ROI beside the point: its halo (200 um = 16 pixels) reaches in
-        // from outside.
-        RenderSettings part = two;
-        part.roi            = Roi { 50, 30, 70, 45 };
-        const auto crop     = render(s, part);
-        for (int64_t y = 30; y < 45; ++y)
-            for (int64_t x = 50; x < 70; ++x)
-                for (size_t l = 0; l < 3; ++l)
-                    ASSERT_EQ(a[static_cast<size_t>((y * 96 + x) * 3 + l)],
-                              crop[static_cast<size_t>(((y - 30) * 20 + (x - 50)) * 3 + l)])
-                        << engine_name(engine) << " " << x << "," << y;
-        // The ROI reads the whole frame (the spread is computed over it).
+        expect_deterministic(s, engine, roi);
+        RenderSettings part;
+        part.roi = roi;
         Roi window;
         ASSERT_TRUE(required_input_window(s.stock, s.scene, 96, 96, part, window));
         EXPECT_EQ(window.x_begin, 0);
@@ -290,12 +253,12 @@ TEST(LightSpread, ZeroStrengthIsNoSpread)
 {
     // Radii without strength spread nothing: bit-identical to the stock
     // without the keys, in every engine.
-    Scene plain = point_light_scene();
+    TestScene plain = point_light_scene();
     for (Layer& l : plain.stock.layers) {
         l.scatter = l.scatter_sigma_um = l.halation = l.halation_radius_um = 0.0;
         l.halation_kernel = HalationKernel::disc;
     }
-    Scene zero = plain;
+    TestScene zero = plain;
     for (Layer& l : zero.stock.layers) {
         l.scatter_sigma_um   = 30.0;
         l.halation_radius_um = 300.0;
@@ -304,7 +267,7 @@ TEST(LightSpread, ZeroStrengthIsNoSpread)
     for (Engine engine : { Engine::exact, Engine::automatic, Engine::fast }) {
         RenderSettings settings;
         settings.engine = engine;
-        EXPECT_TRUE(bit_identical(render(plain, settings), render(zero, settings)))
+        EXPECT_TRUE(bit_identical(render_scene(plain, settings), render_scene(zero, settings)))
             << engine_name(engine);
     }
 }
@@ -334,14 +297,7 @@ std::pair<double, double> ring_density(const std::vector<float>& d, int64_t n, d
             if (k == 16)
                 blocks.push_back(s / k);
         }
-    double mean = 0.0, var = 0.0;
-    for (double b : blocks)
-        mean += b;
-    mean /= blocks.size();
-    for (double b : blocks)
-        var += (b - mean) * (b - mean);
-    var /= blocks.size() - 1;
-    return { mean, std::sqrt(var / blocks.size()) };
+    return mean_and_standard_error(blocks);
 }
 
 TEST(LightSpread, TheHaloHasItsRadiusInMicrometresAtEveryScan)
@@ -351,12 +307,12 @@ TEST(LightSpread, TheHaloHasItsRadiusInMicrometresAtEveryScan)
     // errors); just outside it (1.15 to 1.6 radii) it is the ground (within
     // 4 standard errors of the difference), so the halo ends at its radius
     // in micrometres whatever the scan.
-    const Scene s = point_light_scene();
+    const TestScene s = point_light_scene();
     for (int64_t scan : { 128, 192 }) {
         RenderSettings settings;
         settings.scan_width  = scan;
         settings.scan_height = scan;
-        const auto d         = render(s, settings);
+        const auto d         = render_scene(s, settings);
         const double pitch   = 1200.0 / scan;
         const auto inside    = ring_density(d, scan, pitch, 60.0, 170.0);
         const auto outside   = ring_density(d, scan, pitch, 230.0, 320.0);

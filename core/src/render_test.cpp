@@ -10,21 +10,15 @@
 #include <gtest/gtest.h>
 
 #include "filmgrain/wedge.h"
+#include "test_render.h"
 
 namespace filmgrain {
 namespace {
 
-struct Scene {
-    Stock stock;
-    SceneSettings scene;
-    std::vector<float> pixels;
-    ImageView view;
-};
-
 /// A small RGB gradient on a 1.2 mm frame with the colour preset.
-Scene small_scene()
+TestScene small_scene()
 {
-    Scene s;
+    TestScene s;
     EXPECT_TRUE(load_stock("color-negative", s.stock));
     s.scene.frame_width_mm = 1.2;
     const int w = 48, h = 32;
@@ -36,22 +30,6 @@ Scene small_scene()
                     = static_cast<float>(0.18 * std::exp2((x - 24) / 4.0 + (c - 1) * 0.5));
     s.view = ImageView { s.pixels.data(), w, h, 3 };
     return s;
-}
-
-std::vector<float> render(const Scene& s, RenderSettings settings, RenderStats* stats = nullptr)
-{
-    ScanGeometry scan;
-    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, settings, scan));
-    const Roi roi = settings.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : settings.roi;
-    std::vector<float> out(static_cast<size_t>(roi.npixels()) * s.stock.layers.size(), -1.0f);
-    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), stats);
-    EXPECT_TRUE(st) << st.message();
-    return out;
-}
-
-bool bit_identical(const std::vector<float>& a, const std::vector<float>& b)
-{
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
 /// Every engine, and the tabulated paths forced (on a frame this small auto
@@ -90,7 +68,7 @@ std::vector<std::pair<const char*, RenderSettings>> engine_variants()
 
 TEST(Render, BitIdenticalForThreadsAndTiles)
 {
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     for (const auto& [name, settings] : engine_variants()) {
         RenderSettings one = settings;
         one.nthreads       = 1;
@@ -99,8 +77,8 @@ TEST(Render, BitIdenticalForThreadsAndTiles)
         two.nthreads       = 2;
         two.tile_size_px   = 7;
         RenderStats sa, sb;
-        const auto a = render(s, one, &sa);
-        const auto b = render(s, two, &sb);
+        const auto a = render_scene(s, one, &sa);
+        const auto b = render_scene(s, two, &sb);
         EXPECT_TRUE(bit_identical(a, b)) << name;
         ASSERT_EQ(sa.layers.size(), 3u);
         for (size_t l = 0; l < 3; ++l) {
@@ -129,7 +107,7 @@ TEST(Render, EarlyStopIsBitIdenticalToTheExactEngine)
     // full chain's decisions (the develop uniform is drawn first and n4
     // never decreases); with exact exposure and coverage the image must be
     // the exact engine's, bit for bit.
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     RenderSettings exact;
     exact.engine = Engine::exact;
     RenderSettings early;
@@ -138,8 +116,8 @@ TEST(Render, EarlyStopIsBitIdenticalToTheExactEngine)
     early.exposure_method = ExposureMethod::disc;
     early.coverage        = CoverageMethod::exact;
     RenderStats se, sl;
-    const auto a = render(s, exact, &se);
-    const auto b = render(s, early, &sl);
+    const auto a = render_scene(s, exact, &se);
+    const auto b = render_scene(s, early, &sl);
     EXPECT_TRUE(bit_identical(a, b));
     for (size_t l = 0; l < se.layers.size(); ++l) {
         EXPECT_EQ(se.layers[l].developed, sl.layers[l].developed);
@@ -150,15 +128,15 @@ TEST(Render, EarlyStopIsBitIdenticalToTheExactEngine)
 
 TEST(Render, RoiIsACropOfTheFullRender)
 {
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     for (const auto& [name, settings] : engine_variants()) {
         RenderSettings full = settings;
         full.tile_size_px   = 16;
-        const auto all      = render(s, full);
+        const auto all      = render_scene(s, full);
         RenderSettings part = full;
         part.roi            = Roi { 13, 5, 40, 22 };
         part.tile_size_px   = 5;
-        const auto crop     = render(s, part);
+        const auto crop     = render_scene(s, part);
         const size_t nl = 3, w = 48;
         for (int64_t y = part.roi.y_begin; y < part.roi.y_end; ++y)
             for (int64_t x = part.roi.x_begin; x < part.roi.x_end; ++x)
@@ -176,7 +154,7 @@ TEST(Render, AWindowOfTheInputIsEnough)
     // A ROI render that is given only the input window it needs (as a
     // caller holding part of a huge input would) is bit-identical to one
     // given the whole input; a window too small is refused.
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     RenderSettings settings;
     settings.roi = Roi { 20, 10, 30, 18 };
     Roi w;
@@ -188,15 +166,15 @@ TEST(Render, AWindowOfTheInputIsEnough)
         for (int64_t x = w.x_begin; x < w.x_end; ++x)
             for (int c = 0; c < 3; ++c)
                 window.push_back(s.pixels[(y * 48 + x) * 3 + c]);
-    Scene part  = s;
+    TestScene part  = s;
     part.pixels = window;
     part.view   = ImageView { part.pixels.data(), w.width(), w.height(), 3 };
     part.view.x_origin    = w.x_begin;
     part.view.y_origin    = w.y_begin;
     part.view.full_width  = 48;
     part.view.full_height = 32;
-    const auto whole = render(s, settings);
-    const auto from_window = render(part, settings);
+    const auto whole = render_scene(s, settings);
+    const auto from_window = render_scene(part, settings);
     EXPECT_TRUE(bit_identical(whole, from_window));
 
     ImageView small = part.view;
@@ -209,10 +187,10 @@ TEST(Render, AWindowOfTheInputIsEnough)
 
 TEST(Render, AnotherSeedGivesAnotherImage)
 {
-    Scene s = small_scene();
-    const auto a = render(s, {});
+    TestScene s = small_scene();
+    const auto a = render_scene(s, {});
     s.scene.seed = 1;
-    const auto b = render(s, {});
+    const auto b = render_scene(s, {});
     size_t differ = 0;
     for (size_t i = 0; i < a.size(); ++i)
         differ += a[i] != b[i];
@@ -229,24 +207,24 @@ size_t count_differing(const std::vector<float>& a, const std::vector<float>& b)
 
 TEST(Render, EachFrameHasItsOwnGrainUnlessStatic)
 {
-    Scene s = small_scene();
+    TestScene s = small_scene();
     s.scene.seed        = 7;
-    const auto single   = render(s, {});
+    const auto single   = render_scene(s, {});
     s.scene.frame       = 1001;
-    const auto frame_a  = render(s, {});
+    const auto frame_a  = render_scene(s, {});
     s.scene.frame       = 1002;
-    const auto frame_b  = render(s, {});
+    const auto frame_b  = render_scene(s, {});
     EXPECT_GT(count_differing(frame_a, frame_b), frame_a.size() / 2);
     EXPECT_GT(count_differing(single, frame_a), frame_a.size() / 2);
     // A frame is its documented seed: frame_seed(seed, frame) as a single image.
-    Scene alone         = small_scene();
+    TestScene alone         = small_scene();
     alone.scene.seed    = frame_seed(7, 1002);
-    EXPECT_TRUE(bit_identical(render(alone, {}), frame_b));
+    EXPECT_TRUE(bit_identical(render_scene(alone, {}), frame_b));
     // static: every frame is the single image of the seed.
     s.scene.static_grain = true;
-    EXPECT_TRUE(bit_identical(render(s, {}), single));
+    EXPECT_TRUE(bit_identical(render_scene(s, {}), single));
     s.scene.frame = 1001;
-    EXPECT_TRUE(bit_identical(render(s, {}), single));
+    EXPECT_TRUE(bit_identical(render_scene(s, {}), single));
     EXPECT_NE(frame_seed(7, 1), frame_seed(7, 2));
     EXPECT_NE(frame_seed(7, 1), frame_seed(8, 1));
     EXPECT_NE(frame_seed(7, -1), frame_seed(7, 1));
@@ -254,22 +232,22 @@ TEST(Render, EachFrameHasItsOwnGrainUnlessStatic)
 
 TEST(Render, ScanResolutionIsIndependentOfInputResolution)
 {
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     RenderSettings settings;
     settings.scan_width = 96;
-    const auto out      = render(s, settings);
+    const auto out      = render_scene(s, settings);
     EXPECT_EQ(out.size(), 96u * 64u * 3u);
 }
 
 TEST(Render, NonFiniteAndNegativePixelsAreZeroExposureAndCounted)
 {
-    Scene s = small_scene();
+    TestScene s = small_scene();
     s.pixels[0] = std::numeric_limits<float>::quiet_NaN();
     s.pixels[4] = std::numeric_limits<float>::infinity();
     s.pixels[9]  = -1.0f;
     s.pixels[13] = std::numeric_limits<float>::denorm_min();
     RenderStats stats;
-    const auto out = render(s, {}, &stats);
+    const auto out = render_scene(s, {}, &stats);
     EXPECT_EQ(stats.input.nonfinite_pixels, 2u);
     EXPECT_EQ(stats.input.negative_pixels, 1u);
     EXPECT_EQ(stats.input.denormal_pixels, 1u);
@@ -281,10 +259,10 @@ TEST(Render, NonFiniteAndNegativePixelsAreZeroExposureAndCounted)
 TEST(Render, ZeroExposureDevelopsFogOnly)
 {
     // A black frame: only fog develops, so the developed fraction is f.
-    Scene s = small_scene();
+    TestScene s = small_scene();
     std::fill(s.pixels.begin(), s.pixels.end(), 0.0f);
     RenderStats stats;
-    render(s, {}, &stats);
+    render_scene(s, {}, &stats);
     const double f = 1 - std::exp(-s.stock.development_time_s / s.stock.fog_tau_s);
     for (const auto& l : stats.layers) {
         EXPECT_EQ(l.absorbed_photons, 0u);
@@ -302,12 +280,12 @@ TEST(Render, PixelScaleOfABlackFrameIsTheFogsBooleanModel)
     // 5). The mean over the frame's pixels has the pixels' spread over
     // sqrt(pixels) as its standard error (neighbour correlation is small
     // at 25 um pixels and 3-3.5 um grains); 5 of them.
-    Scene s = small_scene();
+    TestScene s = small_scene();
     std::fill(s.pixels.begin(), s.pixels.end(), 0.0f);
     RenderSettings settings;
     settings.scale = ScaleMethod::pixel;
     RenderStats stats;
-    const std::vector<float> d = render(s, settings, &stats);
+    const std::vector<float> d = render_scene(s, settings, &stats);
     const double f = 1 - std::exp(-s.stock.development_time_s / s.stock.fog_tau_s);
     const size_t nl = s.stock.layers.size();
     for (size_t l = 0; l < nl; ++l) {
@@ -336,7 +314,7 @@ TEST(Render, PixelScaleOfABlackFrameIsTheFogsBooleanModel)
 
 TEST(Render, RejectsBadRequests)
 {
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     std::vector<float> out(48 * 32 * 3);
     RenderSettings settings;
     ImageView two_channels = s.view;
@@ -362,7 +340,7 @@ TEST(Render, RejectsBadRequests)
 
 TEST(Render, ProgressCanCancel)
 {
-    const Scene s = small_scene();
+    const TestScene s = small_scene();
     RenderSettings settings;
     settings.tile_size_px = 4;
     settings.nthreads     = 1;
