@@ -490,11 +490,13 @@ const Modifier kModifiers[] = {
       },
       parse_scale_value },
     { "samples", "N",
-      "sub-scanlines per pixel row (scanline coverage) or sample rows per pixel (raster), [1, 256]",
+      "sub-scanlines per pixel row (scanline coverage), sample rows per pixel (raster), or a "
+      "dye layer's sample rows (disc clouds) or points per axis (gaussian) per pixel, [1, 256]",
       [](const FilmgrainCommand&) {
           return engine_choice("scanline: 2 chords per smallest mean grain radius; raster: rows "
                                "for the tolerance, 21 per smallest mean radius at 0.002, at "
-                               "most 256 (fast: 4)");
+                               "most 256 (fast: 4); dye: 2 per smallest mean cloud radius, 2 to "
+                               "16 (exact: 8 per radius, 4 to 64)");
       },
       parse_samples },
     { "tile", "N", "work tile side in scan pixels, [1, 4096]; speed only, never the output",
