@@ -183,14 +183,14 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
     const double cloud_factor                = cloud_area_factor(stock.layers[l]);
     ExpectedCurve curve;
     curve.layer        = stock.layers[l].name;
-    curve.base_density = stock.base_density;
+    curve.base_density = stock.layer_base_density(l);
     curve.max_density  = stock.max_density;
     const auto point = [&](double v) {
         CurvePoint c;
         c.value         = v;
         c.exposure_lxs  = v * lxs_per_value;
         c.transmittance = mean_transmittance(pops, v, cloud_factor);
-        c.density       = clamp_density(c.transmittance, stock.base_density, stock.max_density);
+        c.density       = clamp_density(c.transmittance, curve.base_density, stock.max_density);
         return c;
     };
     curve.points.push_back(point(0.0));

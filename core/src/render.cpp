@@ -529,8 +529,8 @@ private:
         const size_t nl = m_stock.layers.size();
         const size_t o  = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
                                              + (ix - m_roi.x_begin));
-        m_out[o * nl + layer] = static_cast<float>(
-            density_from_transmittance(transmittance, m_stock.max_density, m_stock.base_density));
+        m_out[o * nl + layer] = static_cast<float>(density_from_transmittance(
+            transmittance, m_stock.max_density, m_stock.layer_base_density(layer)));
     }
 
     void store_density(size_t layer, int64_t ix, int64_t iy, double covered_fraction) const
@@ -539,7 +539,7 @@ private:
         const size_t o  = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
                                              + (ix - m_roi.x_begin));
         m_out[o * nl + layer] = static_cast<float>(density_from_transmittance(
-            1.0 - covered_fraction, m_stock.max_density, m_stock.base_density));
+            1.0 - covered_fraction, m_stock.max_density, m_stock.layer_base_density(layer)));
     }
 
     /// MODEL.md 5: the covered fraction of each pixel of the tile by the

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "filmgrain/expected_curve.h"
 #include "filmgrain/wedge.h"
 #include "test_render.h"
 
@@ -361,6 +362,31 @@ TEST(Wedge, StepsAreExposureOffsets)
     EXPECT_FLOAT_EQ(px[0], static_cast<float>(0.18 * std::exp2(spec.first_stop)));
     const int64_t last = spec.width_px() - 1;
     EXPECT_FLOAT_EQ(px[last], static_cast<float>(0.18 * std::exp2(spec.step_stops(spec.steps - 1))));
+}
+
+TEST(Render, ALayersOwnBaseDensityAddsToThatLayerOnly)
+{
+    // Layer G gets its own base 0.3 (a colour negative's mask): its
+    // densities rise by 0.3 (to float rounding), R and B keep their bits,
+    // and the expected curve's D-min of G rises by 0.3.
+    const TestScene plain = small_scene();
+    TestScene masked      = plain;
+    masked.stock.layers[1].base_density = 0.3;
+    const auto a = render_scene(plain, {}), b = render_scene(masked, {});
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); i += 3) {
+        EXPECT_EQ(a[i], b[i]);
+        EXPECT_NEAR(b[i + 1] - a[i + 1], 0.3, 1e-6);
+        EXPECT_EQ(a[i + 2], b[i + 2]);
+    }
+    ExpectedCurveOptions fog;
+    fog.fog_only = true;
+    std::vector<ExpectedCurve> ca, cb;
+    ASSERT_TRUE(expected_curves(plain.stock, plain.scene, fog, ca));
+    ASSERT_TRUE(expected_curves(masked.stock, masked.scene, fog, cb));
+    EXPECT_EQ(ca[0].min_density(), cb[0].min_density());
+    EXPECT_NEAR(cb[1].min_density() - ca[1].min_density(), 0.3, 1e-12);
+    EXPECT_EQ(masked.stock.layer_base_density(1), plain.stock.base_density + 0.3);
 }
 
 }  // namespace

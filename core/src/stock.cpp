@@ -42,6 +42,7 @@ const NumberField<Population> kPopulationFields[] = {
 };
 
 const NumberField<Layer> kLayerFields[] = {
+    { "base_density", &Layer::base_density, 0.0, 10.0, false },
     { "scatter", &Layer::scatter, 0.0, 1.0, false },
     { "scatter_sigma_um", &Layer::scatter_sigma_um, 0.0, 1000.0, false },
     { "halation", &Layer::halation, 0.0, 1.0, false },

@@ -26,10 +26,10 @@ std::vector<int> preview_layers(const std::vector<std::string>& names)
     return { 0 };
 }
 
-double quantile(std::vector<float> values, double q)
+double quantile(std::vector<double> values, double q)
 {
     values.erase(std::remove_if(values.begin(), values.end(),
-                                [](float v) { return !std::isfinite(v); }),
+                                [](double v) { return !std::isfinite(v); }),
                  values.end());
     if (values.empty())
         return 0.0;
@@ -40,7 +40,8 @@ double quantile(std::vector<float> values, double q)
 }
 
 Preview make_preview(const float* density, int64_t width, int64_t height,
-                     const std::vector<std::string>& layer_names, double base_density)
+                     const std::vector<std::string>& layer_names,
+                     const std::vector<double>& base_densities)
 {
     Preview out;
     const std::vector<int> layers = preview_layers(layer_names);
@@ -51,18 +52,22 @@ Preview make_preview(const float* density, int64_t width, int64_t height,
     out.channels                  = static_cast<int>(layers.size());
     out.pixels.assign(npix * layers.size(), 0);
 
-    // Densities are floats: compare them with the base as stored, so that
-    // an unexposed film (every D == base) maps to black, not to noise.
-    const double base  = static_cast<float>(base_density);
-    const double d_hi  = quantile(std::vector<float>(density, density + npix * nl),
-                                  kPreviewWhiteQuantile);
-    const double range = d_hi - base;
+    // Densities are floats: compare them with the bases as stored (float),
+    // so that an unexposed film (every D == its layer's base) maps to
+    // black, not to noise; the difference of two floats is exact in double.
+    // One range for all layers (above each one's base): neutral.
+    std::vector<double> above(npix * nl);
+    for (size_t i = 0; i < npix; ++i)
+        for (size_t l = 0; l < nl; ++l)
+            above[i * nl + l] = static_cast<double>(density[i * nl + l])
+                                - static_cast<double>(static_cast<float>(base_densities[l]));
+    const double range = quantile(above, kPreviewWhiteQuantile);
     if (!(range > 0.0))
         return out;
     for (size_t i = 0; i < npix; ++i)
         for (size_t c = 0; c < layers.size(); ++c) {
-            const double d = density[i * nl + static_cast<size_t>(layers[c])];
-            double p       = std::isfinite(d) ? (d - base) / range : 0.0;
+            const double d = above[i * nl + static_cast<size_t>(layers[c])];
+            double p       = std::isfinite(d) ? d / range : 0.0;
             p              = std::clamp(p, 0.0, 1.0);
             out.pixels[i * layers.size() + c]
                 = static_cast<uint8_t>(std::lround(255.0 * std::pow(p, 1.0 / kPreviewGamma)));
@@ -80,7 +85,10 @@ Status make_film_preview(const float* density, int64_t width, int64_t height,
         names.push_back(l.name);
     const auto fallback = [&](const std::string& why) {
         warning = "preview: " + why + "; the preview is a plain inversion of the density";
-        out     = make_preview(density, width, height, names, stock.base_density);
+        std::vector<double> bases;
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            bases.push_back(stock.layer_base_density(l));
+        out = make_preview(density, width, height, names, bases);
         return Status();
     };
     std::array<int, 3> layers {};

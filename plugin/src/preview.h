@@ -20,7 +20,7 @@ std::vector<int> preview_layers(const std::vector<std::string>& layer_names);
 
 /// The q-quantile (q in [0, 1]) of the finite values of `values` (nearest
 /// rank, floor(q * (n - 1))); 0 when there are none.
-double quantile(std::vector<float> values, double q);
+double quantile(std::vector<double> values, double q);
 
 /// The percentile of the density that maps to white.
 constexpr double kPreviewWhiteQuantile = 0.999;
@@ -34,13 +34,15 @@ struct Preview {
     std::vector<uint8_t> pixels;  ///< packed, row-major
 };
 
-/// p = clamp((D - base) / (D_hi - base), 0, 1) with D_hi the 99.9th
-/// percentile of all densities of all layers (one scale for every channel,
-/// so no colour shift), stored as round(255 * p^(1/2.2)). If D_hi <= base
-/// (an unexposed film) every pixel is 0. `density` holds width x height
-/// pixels of layer_names.size() interleaved floats.
+/// p = clamp((D - base) / R, 0, 1), base the layer's base density and R
+/// the 99.9th percentile of D - base over all pixels of all layers (one
+/// scale for every channel, so no colour shift), stored as
+/// round(255 * p^(1/2.2)). If R <= 0 (an unexposed film) every pixel is 0.
+/// `density` holds width x height pixels of layer_names.size() interleaved
+/// floats; `base_densities` one per layer.
 Preview make_preview(const float* density, int64_t width, int64_t height,
-                     const std::vector<std::string>& layer_names, double base_density);
+                     const std::vector<std::string>& layer_names,
+                     const std::vector<double>& base_densities);
 
 /// The preview through OCIO (--help "Preview"): each layer's density above
 /// its D-min (expected_curves, fog_only: base + fog) as ADX10 code values

@@ -22,7 +22,7 @@ TEST(Preview, LayerChoice)
 
 TEST(Preview, Quantile)
 {
-    std::vector<float> v;
+    std::vector<double> v;
     for (int i = 0; i <= 1000; ++i)
         v.push_back(static_cast<float>(1000 - i));
     EXPECT_EQ(quantile(v, 0.999), 999.0);
@@ -39,7 +39,7 @@ TEST(Preview, MappingIsOneScaleForAllChannels)
     // the six values = the largest below the top rank: 1.2.
     const float d[] = { 0.2f, 0.7f, 1.2f,   // pixel 0
                         1.2f, 0.1f, 1.25f };  // pixel 1
-    const Preview p = make_preview(d, 2, 1, { "R", "G", "B" }, 0.2);
+    const Preview p = make_preview(d, 2, 1, { "R", "G", "B" }, { 0.2, 0.2, 0.2 });
     ASSERT_EQ(p.channels, 3);
     ASSERT_EQ(p.pixels.size(), 6u);
     EXPECT_EQ(p.pixels[0], 0);  // at base
@@ -53,7 +53,7 @@ TEST(Preview, MappingIsOneScaleForAllChannels)
 TEST(Preview, UnexposedFilmIsBlack)
 {
     const float d[] = { 0.2f, 0.2f, 0.2f, 0.2f };
-    const Preview p = make_preview(d, 2, 2, { "Y" }, 0.2);
+    const Preview p = make_preview(d, 2, 2, { "Y" }, { 0.2 });
     EXPECT_EQ(p.channels, 1);
     for (uint8_t v : p.pixels)
         EXPECT_EQ(v, 0);
@@ -90,7 +90,10 @@ TEST(Preview, ThroughOcioAdxAndTheAcesView)
     stock.layers[0].name = "X";
     ASSERT_TRUE(make_film_preview(d, 3, 1, stock, SceneSettings(), "", p, warning));
     EXPECT_NE(warning.find("plain inversion"), std::string::npos) << warning;
-    EXPECT_EQ(p.pixels, make_preview(d, 3, 1, { "X", "G", "B" }, stock.base_density).pixels);
+    EXPECT_EQ(p.pixels, make_preview(d, 3, 1, { "X", "G", "B" },
+                                     { stock.layer_base_density(0), stock.layer_base_density(1),
+                                       stock.layer_base_density(2) })
+                            .pixels);
 }
 
 }  // namespace

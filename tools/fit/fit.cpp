@@ -103,18 +103,32 @@ double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::Datasheet
     return j;
 }
 
-/// The base density that puts the stock's D-min on the datasheet's (the
-/// mean over layers when they differ: one base per stock), >= 0.
-double fitted_base(const sm::Datasheet& sheet, const sm::DatasheetFigures& f, double base_now)
+/// The base densities that put each layer's D-min on the datasheet's: the
+/// stock's base_density the smallest base any layer needs, each layer's own
+/// base_density the rest (a colour negative's mask), all >= 0. A layer
+/// without a D-min target keeps its own. `f` was measured on `stock`.
+void fit_base_densities(const sm::Datasheet& sheet, const sm::DatasheetFigures& f, Stock& stock)
 {
-    double sum = 0.0;
-    int n      = 0;
-    for (size_t i = 0; i < sheet.layers.size(); ++i)
-        if (sheet.layers[i].d_min) {
-            sum += *sheet.layers[i].d_min - (f.layers[i].d_min.value - base_now);
-            ++n;
-        }
-    return n ? std::max(0.0, sum / n) : base_now;
+    std::vector<std::pair<size_t, double>> need;  // stock layer, total base it needs
+    for (size_t i = 0; i < sheet.layers.size(); ++i) {
+        if (!sheet.layers[i].d_min)
+            continue;
+        size_t l = 0;
+        while (l < stock.layers.size() && stock.layers[l].name != sheet.layers[i].name)
+            ++l;
+        if (l == stock.layers.size())
+            continue;
+        const double fog = f.layers[i].d_min.value - stock.layer_base_density(l);
+        need.push_back({ l, std::max(0.0, *sheet.layers[i].d_min - fog) });
+    }
+    if (need.empty())
+        return;
+    double common = need.front().second;
+    for (const auto& [l, b] : need)
+        common = std::min(common, b);
+    stock.base_density = common;
+    for (const auto& [l, b] : need)
+        stock.layers[l].base_density = b - common;
 }
 
 /// Reciprocity misses in tolerance units.
@@ -189,7 +203,7 @@ public:
             ++m_evaluations;
             if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
                 return kUnmeasurable;
-            return layer_objective(m_sheet, i, f, trial.base_density);
+            return layer_objective(m_sheet, i, f, trial.layer_base_density(l));
         };
         std::vector<double> best = x0;
         double best_j            = objective(x0);
@@ -256,7 +270,7 @@ public:
         sm::DatasheetFigures f;
         if (Status s = sm::measure_datasheet_figures(m_stock, m_sheet, models, fo, f); !s)
             return s;
-        m_stock.base_density = fitted_base(m_sheet, f, m_stock.base_density);
+        fit_base_densities(m_sheet, f, m_stock);
         return {};
     }
 
@@ -549,7 +563,7 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
                 const sm::ApertureTemplate ap
                     = sm::make_circular_aperture(sm::kGranularityApertureUm, r.pitch_um);
                 const sm::GranularityReading gr
-                    = sm::read_granularity(tr[l], r.side_px, ap, 12, stock.base_density, 4);
+                    = sm::read_granularity(tr[l], r.side_px, ap, 12, stock.layer_base_density(l), 4);
                 out.push_back({ t.name + " RMS at " + (gt.net ? "net " : "gross ")
                                     + format(gt.density),
                                 f.granularity[g].value, f.granularity[g].error,

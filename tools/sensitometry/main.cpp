@@ -401,7 +401,8 @@ private:
             const double ea    = M_PI / 4.0 * pop.diameter_um * pop.diameter_um
                               * std::exp(pop.diameter_log_sigma * pop.diameter_log_sigma);
             const double f     = -std::expm1(-t / stock.fog_tau_s);
-            const double model_fog = pop.grains_per_um2 * ea * f / std::log(10.0) + stock.base_density;
+            const double model_fog
+                = pop.grains_per_um2 * ea * f / std::log(10.0) + stock.layer_base_density(0);
             table.row(c.engine, t, m.gamma, m.gamma_se, l.fog_density, l.fog_density_se,
                       model_fog, m.speed_log10_h, m.d_max);
             json j = metrics_json(m);
@@ -463,12 +464,13 @@ private:
         const fs::ApertureTemplate a = fs::make_circular_aperture(aperture_um, c.patch.pitch_um);
         const int spacing = std::max(1, static_cast<int>(std::lround(aperture_um / 4.0 / c.patch.pitch_um)));
         const fs::GranularityReading g = fs::read_granularity(
-            c.transmittance[layer], c.patch.side_px, a, spacing, stock.base_density);
+            c.transmittance[layer], c.patch.side_px, a, spacing, stock.layer_base_density(layer));
         const double t          = c.model.mean_transmittance();
         const double boolean    = std::sqrt(fs::aperture_transmittance_variance(c.model, a)) / t
                                / std::log(10.0);
         const double siedentopf = fs::siedentopf_sigma_density(
-            c.model.mean_developed_area_um2(), g.mean_density - stock.base_density, a.area_um2());
+            c.model.mean_developed_area_um2(), g.mean_density - stock.layer_base_density(layer),
+            a.area_um2());
         const fs::LayerReading& r = c.patch.layers[layer];
         json j = { { "label", label },
                    { "layer", r.name },
@@ -477,7 +479,7 @@ private:
                    { "log10_h", c.log10_h },
                    { "macro_density", r.density },
                    { "macro_density_se", r.density_se },
-                   { "nutting_density", c.model.net_density() + stock.base_density },
+                   { "nutting_density", c.model.net_density() + stock.layer_base_density(layer) },
                    { "mean_aperture_density", g.mean_density },
                    { "sigma_d", g.sigma_density },
                    { "sigma_d_se", g.sigma_density_se },
@@ -493,7 +495,7 @@ private:
         if (csv)
             csv->row(filmgrain::engine_name(m_settings.engine), label, r.name, aperture_um,
                      g.aperture_area_um2, c.log10_h, r.density, r.density_se,
-                     c.model.net_density() + stock.base_density, g.mean_density,
+                     c.model.net_density() + stock.layer_base_density(layer), g.mean_density,
                      g.sigma_density, g.sigma_density_se, j["sigma_d_delta"].get<double>(),
                      j["sigma_d_delta_se"].get<double>(), boolean, siedentopf, g.selwyn_um(),
                      j["boolean_selwyn_g_um"].get<double>());
@@ -548,7 +550,7 @@ private:
         Csv vs_a(path("granularity_vs_aperture.csv"), header);
         {
             GranularityCase c;
-            if (Status s = granularity_patch(paper, 0, 1.0 - paper.base_density, 4000.0, 4.0,
+            if (Status s = granularity_patch(paper, 0, 1.0 - paper.layer_base_density(0), 4000.0, 4.0,
                                              fs::patch_seed(m_opt.seed, 4100), c);
                 !s)
                 return s;
@@ -575,7 +577,7 @@ private:
                 return s;
             for (size_t l = 0; l < neg.layers.size(); ++l) {
                 json j = granularity_row(neg, c, l, 48.0, &vs_d, "color-negative");
-                j["fog_density"] = fog_model.net_density() + neg.base_density;
+                j["fog_density"] = fog_model.net_density() + neg.layer_base_density(l);
                 m_results["granularity"]["datasheet"]["color-negative"][neg.layers[l].name] = j;
             }
         }
@@ -617,10 +619,10 @@ private:
             for (int64_t y = 8; y < spec.height_px - 8; ++y)
                 for (int64_t x = i * spec.step_width_px + 8; x < (i + 1) * spec.step_width_px - 8; ++x) {
                     sum += std::pow(10.0, -(density[static_cast<size_t>(y * spec.width_px() + x)]
-                                           - stock.base_density));
+                                           - stock.layer_base_density(0)));
                     n += 1.0;
                 }
-            const double d = fs::density_from_mean_transmittance(sum / n, stock.base_density);
+            const double d = fs::density_from_mean_transmittance(sum / n, stock.layer_base_density(0));
             const double h = stock.exposure_at_grey_lxs * std::exp2(spec.step_stops(i));
             csv.row(stats.engine, i, spec.step_stops(i), std::log10(h), d);
             steps.push_back(d);

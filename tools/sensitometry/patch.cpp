@@ -90,8 +90,9 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     const double exposure_lxs = static_cast<double>(grey) / 0.18 * stock.exposure_at_grey_lxs
                                 * std::exp2(scene.exposure_stops);
     const int b          = spec.blocks;
-    const float clamp_at = static_cast<float>(stock.max_density + stock.base_density);
     for (size_t l = 0; l < nl; ++l) {
+        const double base    = stock.layer_base_density(l);
+        const float clamp_at = static_cast<float>(stock.max_density + base);
         LayerReading r;
         r.name = stock.layers[l].name;
         double sens = 0.0;
@@ -105,7 +106,7 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
             for (int64_t x = 0; x < side_px; ++x) {
                 const size_t i = static_cast<size_t>(y * side_px + x);
                 const float d  = density[i * nl + l];
-                const double t = std::pow(10.0, -(static_cast<double>(d) - stock.base_density));
+                const double t = std::pow(10.0, -(static_cast<double>(d) - base));
                 if (d >= clamp_at)
                     ++r.clamped_pixels;
                 if (transmittance)
@@ -129,7 +130,7 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
         const double blocks_n = static_cast<double>(block_sum.size());
         const double se_t     = std::sqrt(var / (blocks_n - 1.0));
         r.mean_transmittance  = mean;
-        r.density             = density_from_mean_transmittance(mean, stock.base_density);
+        r.density             = density_from_mean_transmittance(mean, base);
         r.density_se          = se_t / (mean * std::log(10.0));
         r.clamp_density_bound = static_cast<double>(r.clamped_pixels)
                                 * std::pow(10.0, -stock.max_density) / (n * mean * std::log(10.0));

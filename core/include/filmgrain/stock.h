@@ -63,6 +63,10 @@ struct Layer {
     /// At least one population.
     std::vector<Population> populations = std::vector<Population>(1);
 
+    /// This layer's own minimum density (a colour negative's mask in this
+    /// layer's channel), added to the stock's base_density. Range [0, 10].
+    double base_density = 0.0;
+
     /// MODEL.md 9, light spread in the film before photons are counted.
     /// Fraction of the light scattered sideways. Range [0, 1].
     double scatter = 0.0;
@@ -108,7 +112,8 @@ struct Stock {
     double development_tau_s = 120.0;
     /// Fog time constant: f = 1 - exp(-t / fog_tau). Range (0, 1e30].
     double fog_tau_s = 5000.0;
-    /// Density added to every pixel (film base). Range [0, 10].
+    /// Density added to every pixel of every layer (film base); each layer
+    /// may add its own (Layer::base_density). Range [0, 10].
     double base_density = 0.0;
     /// Clamp of the density computed from transmittance. Range (0, 20].
     double max_density = 4.0;
@@ -126,6 +131,13 @@ struct Stock {
 
     /// Whether any inhibition is on: without, development is MODEL.md 4's.
     bool inhibits() const;
+
+    /// The density layer `layer`'s pixels start from (MODEL.md 5's
+    /// base_density): the stock's base_density plus the layer's own.
+    double layer_base_density(size_t layer) const
+    {
+        return base_density + layers[layer].base_density;
+    }
 
     /// Check every field against its range; the message names the field
     /// (as a JSON path such as layers[1].populations[0].diameter_um), its
