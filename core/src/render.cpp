@@ -261,16 +261,30 @@ public:
                         plane_filled = true;
                     }
                     FastCounts c;
-                    if (pop.exposure == ExposureMethod::centre)
-                        develop_fast(layer, pop, rect, scratch.discs, scratch.grains_seen, c,
-                                     [&](double x, double y, double r) {
-                            return scratch.plane.at(x, y) * r * r * M_PI;
-                        });
-                    else
-                        develop_fast(layer, pop, rect, scratch.discs, scratch.grains_seen, c,
-                                     [&](double x, double y, double r) {
-                            return layer.exposure.integrate_over_disc(x, y, r);
-                        });
+                    const auto centre = [&](double x, double y, double r) {
+                        return scratch.plane.at(x, y) * r * r * M_PI;
+                    };
+                    const auto disc = [&](double x, double y, double r) {
+                        return layer.exposure.integrate_over_disc(x, y, r);
+                    };
+                    // Silver without inhibition (the common case) runs the
+                    // kernel without the per-grain checks of MODEL.md 8, 10.
+                    const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
+                    if (pop.exposure == ExposureMethod::centre) {
+                        if (plain)
+                            develop_fast<true>(layer, pop, rect, scratch.discs,
+                                               scratch.grains_seen, c, centre);
+                        else
+                            develop_fast<false>(layer, pop, rect, scratch.discs,
+                                                scratch.grains_seen, c, centre);
+                    } else {
+                        if (plain)
+                            develop_fast<true>(layer, pop, rect, scratch.discs,
+                                               scratch.grains_seen, c, disc);
+                        else
+                            develop_fast<false>(layer, pop, rect, scratch.discs,
+                                                scratch.grains_seen, c, disc);
+                    }
                     grains += c.grains;
                     developed += c.developed;
                     photons += c.photons;
@@ -393,10 +407,12 @@ private:
     /// integrated over the disc (value x um^2), chosen once per population.
     /// Developed grains whose image touches the tile are appended to
     /// `discs`.
-    template<typename Integral>
+    /// `Plain`: the layer is silver and not inhibited (no reach or uniform
+    /// to adjust per grain).
+    template<bool Plain, typename Integral>
     void develop_fast(const LayerPlan& layer, const PopulationPlan& pop, const RectUm& rect,
                       std::vector<Disc>& discs, uint32_t& grains_seen, FastCounts& c,
-                      Integral&& integral) const
+                      const Integral& integral) const
     {
         const FramePlane* inhibition = layer.inhibition.get();
         // Without a curve (grains=fast asked for with other kinetics) every
@@ -404,18 +420,20 @@ private:
         const DevelopCurve* curve = pop.curve.get();
         const double lambda_max   = curve ? curve->lambda_max() : -1.0;
         const double k            = pop.photons_per_value_um2;
-        pop.fast->for_each_grain_near(reach_rect(rect, layer, pop), [&](double x, double y,
-                                                                        double r, uint32_t bits,
-                                                                        uint64_t id) {
+        pop.fast->for_each_grain_near(Plain ? rect : reach_rect(rect, layer, pop),
+                                      [&](double x, double y, double r, uint32_t bits,
+                                          uint64_t id) {
             poll_stop(grains_seen);
             const Disc disc { x, y, r };
-            if (!image_touches_rect(layer, disc, rect))
+            if (Plain ? !disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um)
+                      : !image_touches_rect(layer, disc, rect))
                 return;
             const double lambda = k * integral(x, y, r);
             // u in (0, 1); develops iff u >= 1 - P, as Development::develops.
             double u = (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
-            if (inhibition)
-                u = inhibited_uniform(u, inhibition->at(x, y));
+            if constexpr (!Plain)
+                if (inhibition)
+                    u = inhibited_uniform(u, inhibition->at(x, y));
             bool developed;
             GrainOutcome o;  // photons and events: only beyond the curve
             if (lambda <= lambda_max) {
