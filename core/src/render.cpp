@@ -270,21 +270,18 @@ public:
                     // Silver without inhibition (the common case) runs the
                     // kernel without the per-grain checks of MODEL.md 8, 10.
                     const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
-                    if (pop.exposure == ExposureMethod::centre) {
+                    const auto run = [&](const auto& integral) {
                         if (plain)
                             develop_fast<true>(layer, pop, rect, scratch.discs,
-                                               scratch.grains_seen, c, centre);
+                                               scratch.grains_seen, c, integral);
                         else
                             develop_fast<false>(layer, pop, rect, scratch.discs,
-                                                scratch.grains_seen, c, centre);
-                    } else {
-                        if (plain)
-                            develop_fast<true>(layer, pop, rect, scratch.discs,
-                                               scratch.grains_seen, c, disc);
-                        else
-                            develop_fast<false>(layer, pop, rect, scratch.discs,
-                                                scratch.grains_seen, c, disc);
-                    }
+                                                scratch.grains_seen, c, integral);
+                    };
+                    if (pop.exposure == ExposureMethod::centre)
+                        run(centre);
+                    else
+                        run(disc);
                     grains += c.grains;
                     developed += c.developed;
                     photons += c.photons;

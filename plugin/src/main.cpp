@@ -752,20 +752,15 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     auto t = Clock::now();
     OIIO::ImageBuf src;
     OIIO::ImageSpec header;  // the input's own spec (src may hold only a window of it)
-    if (a.wedge) {
-        src                     = make_wedge();
+    if (a.wedge || a.chart) {  // a built-in scene, already scene-linear
+        src                     = a.wedge ? make_wedge() : make_chart();
         header                  = src.spec();
-        report.input_file       = "wedge";
+        report.input_file       = a.wedge ? "wedge" : "chart";
         report.input_colorspace = "scene_linear";
-        con.info("input: the built-in step wedge, " + std::to_string(src.spec().width) + "x"
-                 + std::to_string(src.spec().height) + " scene-linear grey");
-    } else if (a.chart) {
-        src                     = make_chart();
-        header                  = src.spec();
-        report.input_file       = "chart";
-        report.input_colorspace = "scene_linear";
-        con.info("input: the built-in look chart, " + std::to_string(src.spec().width) + "x"
-                 + std::to_string(src.spec().height) + " scene-linear RGB");
+        con.info(std::string("input: the built-in ")
+                 + (a.wedge ? "step wedge, " : "look chart, ") + std::to_string(src.spec().width)
+                 + "x" + std::to_string(src.spec().height)
+                 + (a.wedge ? " scene-linear grey" : " scene-linear RGB"));
     } else {
         if (Status s = read_input(job.input, opts, cmd, src, header); !s)
             return s;
