@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 
 namespace filmgrain {
 
@@ -117,6 +119,109 @@ double cloud_area_factor(const Layer& layer)
     if (layer.cloud_profile == CloudProfile::disc)
         return r2 * -std::expm1(-layer.cloud_density * kLn10);
     return r2 * 0.5 * ein(layer.cloud_density * kLn10);
+}
+
+double lens_area_um2(double r_um, double h_um)
+{
+    if (h_um >= 2.0 * r_um)
+        return 0.0;
+    const double h = std::max(0.0, h_um);
+    return 2.0 * r_um * r_um * std::acos(h / (2.0 * r_um))
+           - 0.5 * h * std::sqrt(std::max(0.0, 4.0 * r_um * r_um - h * h));
+}
+
+namespace {
+
+/// Grid steps per cloud radius of the gaussian overlap table.
+constexpr int kGaussianOverlapSteps = 32;
+
+/// k(R = 1, h) of gaussian clouds of peak density `density` at h = i /
+/// kGaussianOverlapSteps, i = 0 .. 2 kGaussianCloudReach steps: the sum of
+/// f(p) f(p + h) over a square grid of that step (the trapezoid rule: f
+/// is smooth and, with the cut, 0 at the grid's edge), f = 1 - 10^-D_1.
+std::vector<double> gaussian_overlap_table(double density)
+{
+    constexpr int kSide = static_cast<int>(kGaussianCloudReach) * kGaussianOverlapSteps;
+    constexpr int kN    = 2 * kSide + 1;  // grid points per axis over [-3, 3]
+    constexpr double kStep = 1.0 / kGaussianOverlapSteps;
+    std::vector<double> f(static_cast<size_t>(kN * kN));
+    for (int j = 0; j < kN; ++j)
+        for (int i = 0; i < kN; ++i) {
+            const double tx = (i - kSide) * kStep, ty = (j - kSide) * kStep;
+            const double t2 = tx * tx + ty * ty;
+            f[static_cast<size_t>(j * kN + i)]
+                = t2 >= kGaussianCloudReach * kGaussianCloudReach
+                      ? 0.0
+                      : -std::expm1(-kLn10 * density * std::exp(-2.0 * t2));
+        }
+    std::vector<double> k(static_cast<size_t>(2 * kSide + 2), 0.0);
+    for (int s = 0; s <= 2 * kSide; ++s) {
+        double sum = 0.0;
+        for (int j = 0; j < kN; ++j) {
+            const double* row = &f[static_cast<size_t>(j * kN)];
+            for (int i = 0; i + s < kN; ++i)
+                sum += row[i] * row[i + s];
+        }
+        k[static_cast<size_t>(s)] = sum * kStep * kStep;
+    }
+    return k;  // the last entry stays 0: beyond the reach
+}
+
+/// One table per cloud density, made once per process.
+std::shared_ptr<const std::vector<double>> shared_gaussian_overlap(double density)
+{
+    static std::mutex mutex;
+    static std::map<double, std::shared_ptr<const std::vector<double>>> tables;
+    const std::lock_guard<std::mutex> lock(mutex);
+    auto& t = tables[density];
+    if (!t)
+        t = std::make_shared<const std::vector<double>>(gaussian_overlap_table(density));
+    return t;
+}
+
+}  // namespace
+
+ImageOverlap::ImageOverlap(const Layer& layer)
+    : m_image(layer.image),
+      m_profile(layer.cloud_profile),
+      m_ratio(layer.image == LayerImage::dye ? layer.cloud_diameter_ratio : 1.0),
+      m_area_factor(cloud_area_factor(layer))
+{
+    if (m_image == LayerImage::dye) {
+        const double block = -std::expm1(-layer.cloud_density * kLn10);
+        m_disc_factor      = block * block;
+        if (m_profile == CloudProfile::gaussian)
+            m_gaussian = shared_gaussian_overlap(layer.cloud_density);
+    }
+}
+
+double ImageOverlap::blocking_um2(double r_um) const
+{
+    return M_PI * r_um * r_um * m_area_factor;
+}
+
+double ImageOverlap::overlap_um2(double r_um, double h_um) const
+{
+    const double rc = m_ratio * r_um;
+    if (m_image == LayerImage::silver)
+        return lens_area_um2(r_um, h_um);
+    if (m_profile == CloudProfile::disc)
+        return m_disc_factor * lens_area_um2(rc, h_um);
+    const std::vector<double>& k = *m_gaussian;
+    const double x = std::fabs(h_um) / rc * kGaussianOverlapSteps;
+    const size_t i = static_cast<size_t>(x);
+    if (!(x < static_cast<double>(k.size() - 1)))
+        return 0.0;
+    const double f = x - static_cast<double>(i);
+    return rc * rc * (k[i] * (1.0 - f) + k[i + 1] * f);
+}
+
+double ImageOverlap::overlap_range_um(double r_um) const
+{
+    if (m_image == LayerImage::silver)
+        return 2.0 * r_um;
+    const double rc = m_ratio * r_um;
+    return m_profile == CloudProfile::disc ? 2.0 * rc : 2.0 * kGaussianCloudReach * rc;
 }
 
 void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, double max_density,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -30,6 +31,48 @@ double image_reach_factor(const Layer& layer);
 /// with k = cloud_density ln 10 and Ein(k) = integral_0^k (1 - e^-t) / t dt
 /// (the per-point clamp at max_density is not in this expectation).
 double cloud_area_factor(const Layer& layer);
+
+/// Area shared by two discs of radius r_um whose centres are h_um apart
+/// (the "lens"), square micrometres; 0 from h = 2 r.
+double lens_area_um2(double r_um, double h_um);
+
+/// The second-order statistics of one developed grain's image, for the
+/// Boolean model of a uniformly exposed layer (MODEL.md 5 and 8). With
+/// a_r(x) = 10^-D_1(x) the transmittance of one grain's image (0 inside a
+/// silver disc), a grain of radius r blocks b(r) = integral (1 - a_r(x)) dx
+/// and two points h apart share k(r, h) = integral (1 - a_r(x))
+/// (1 - a_r(x + h)) dx, so that a Poisson field of them (n per um^2,
+/// developing with P) has E[T] = exp(-n E[P b]) and Cov(T(x), T(x + h)) =
+/// E[T]^2 (exp(n E[P k(h)]) - 1). Silver: b = pi r^2, k = the lens area.
+/// Disc clouds of radius R = ratio r: (1 - 10^-c) and (1 - 10^-c)^2 times
+/// the silver values at R. Gaussian clouds: R^2 times a function of h / R,
+/// the autocorrelation of 1 - 10^(-c exp(-2 t^2)) (cut at 3 R as the
+/// render cuts it) summed on a grid of step R / 32 once per cloud density
+/// (shared by every instance: a few milliseconds, then a lookup) and
+/// interpolated linearly. The per-point clamp at max_density is not in
+/// these statistics (as in cloud_area_factor). Thread safety: const.
+class ImageOverlap {
+public:
+    /// Opaque silver discs.
+    ImageOverlap() = default;
+    explicit ImageOverlap(const Layer& layer);
+
+    /// b(r), square micrometres: pi r^2 cloud_area_factor.
+    double blocking_um2(double r_um) const;
+    /// k(r, h), square micrometres; k(r, 0) <= b(r), equal for silver.
+    double overlap_um2(double r_um, double h_um) const;
+    /// The distance from which k(r, h) is 0: twice the image's reach.
+    double overlap_range_um(double r_um) const;
+
+private:
+    LayerImage m_image     = LayerImage::silver;
+    CloudProfile m_profile = CloudProfile::disc;
+    double m_ratio         = 1.0;
+    double m_area_factor   = 1.0;  ///< cloud_area_factor
+    double m_disc_factor   = 1.0;  ///< (1 - 10^-c)^2 for disc clouds
+    /// Gaussian clouds: k at h = i R / kGaussianOverlapSteps, over R^2.
+    std::shared_ptr<const std::vector<double>> m_gaussian;
+};
 
 /// Scratch space for dye_transmittance, reused between calls.
 struct DyeScratch {

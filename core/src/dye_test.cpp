@@ -35,6 +35,78 @@ double blocking_numeric(const Layer& layer)
     return sum / (M_PI * r * r);
 }
 
+/// integral of (1 - 10^-D_1(x)) (1 - 10^-D_1(x + h)) over the plane, grain
+/// radius 1, by the midpoint rule on a grid of step 1/200 cloud radii.
+double overlap_numeric(const Layer& layer, double h)
+{
+    const double rc = layer.cloud_diameter_ratio;
+    const bool gaussian = layer.cloud_profile == CloudProfile::gaussian;
+    const double reach  = gaussian ? 3.0 * rc : rc;
+    const auto f = [&](double x, double y) {
+        const double q = (x * x + y * y) / (rc * rc);
+        if (q > (reach / rc) * (reach / rc))
+            return 0.0;
+        return 1.0 - std::pow(10.0, -layer.cloud_density * (gaussian ? std::exp(-2.0 * q) : 1.0));
+    };
+    const double step = rc / 200.0;
+    const int n       = static_cast<int>(std::ceil(2.0 * reach / step));
+    double sum        = 0.0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double x = -reach + (i + 0.5) * step, y = -reach + (j + 0.5) * step;
+            sum += f(x, y) * f(x + h, y);
+        }
+    return sum * step * step;
+}
+
+// ImageOverlap (the Boolean statistics of one grain's image, which the
+// sensitometry's granularity and the pixel scale use): blocking area and
+// overlap against brute-force integrals, the silver limit, and the identity
+// integral of k(h) over the plane = b^2.
+TEST(Dye, ImageOverlapAgainstIntegrals)
+{
+    const ImageOverlap silver;
+    EXPECT_DOUBLE_EQ(silver.blocking_um2(1.5), M_PI * 2.25);
+    EXPECT_DOUBLE_EQ(silver.overlap_um2(1.5, 0.7), lens_area_um2(1.5, 0.7));
+    EXPECT_EQ(silver.overlap_range_um(1.5), 3.0);
+    for (const CloudProfile profile : { CloudProfile::disc, CloudProfile::gaussian })
+        for (const double density : { 0.3, 1.0, 5.0 }) {
+            Layer layer;
+            layer.image                = LayerImage::dye;
+            layer.cloud_profile        = profile;
+            layer.cloud_diameter_ratio = 1.6;
+            layer.cloud_density        = density;
+            const ImageOverlap image(layer);
+            const std::string what = std::string(cloud_profile_name(profile)) + " density "
+                                     + std::to_string(density);
+            EXPECT_NEAR(image.blocking_um2(1.0), M_PI * blocking_numeric(layer),
+                        1e-6 * image.blocking_um2(1.0)) << what;
+            // Radius 1 here; radius 0.5 is the same shape at a quarter the area.
+            const double k0 = image.overlap_um2(1.0, 0.0);
+            EXPECT_LT(k0, image.blocking_um2(1.0)) << what;
+            for (const double h : { 0.0, 0.4, 1.1, 2.0, 3.9 }) {
+                // Tolerance: the grid sums' error (far below) plus the
+                // table's linear interpolation in h, (step^2 / 8) max |k''|
+                // with step = rc / 32 and |k''| < 4 k0 / rc^2: 5e-4 k0.
+                EXPECT_NEAR(image.overlap_um2(1.0, h), overlap_numeric(layer, h), 5e-4 * k0)
+                    << what << " h " << h;
+                EXPECT_NEAR(image.overlap_um2(0.5, 0.5 * h), 0.25 * image.overlap_um2(1.0, h),
+                            1e-12 * k0) << what;
+            }
+            EXPECT_EQ(image.overlap_um2(1.0, image.overlap_range_um(1.0)), 0.0) << what;
+            // integral over the plane of k(h) d^2h = b^2.
+            const double range = image.overlap_range_um(1.0);
+            const int n        = 20000;
+            double integral    = 0.0;
+            for (int i = 0; i < n; ++i) {
+                const double h = (i + 0.5) * range / n;
+                integral += image.overlap_um2(1.0, h) * 2.0 * M_PI * h * range / n;
+            }
+            const double b = image.blocking_um2(1.0);
+            EXPECT_NEAR(integral, b * b, 2e-3 * b * b) << what;
+        }
+}
+
 TEST(Dye, StockKeys)
 {
     Stock s;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dye.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -22,15 +23,6 @@ constexpr int kDistanceNodes = 512;
 /// never of the pixels, so that every ROI uses the same table.
 constexpr double kGrey = 0.18;
 constexpr int kOctavesBelow = 16, kOctavesAbove = 12, kPerOctave = 16;
-
-/// Area shared by two discs of radius r whose centres are h apart.
-double lens_area_um2(double h_um, double r_um)
-{
-    if (h_um >= 2.0 * r_um)
-        return 0.0;
-    return 2.0 * r_um * r_um * std::acos(h_um / (2.0 * r_um))
-           - 0.5 * h_um * std::sqrt(4.0 * r_um * r_um - h_um * h_um);
-}
 
 }  // namespace
 
@@ -98,7 +90,7 @@ public:
         for (Sizes& sz : m_sizes)
             for (size_t k = 0; k < sz.r_um.size(); ++k)
                 for (int j = 0; j < kDistanceNodes; ++j)
-                    sz.lens_um2.push_back(lens_area_um2((j + 0.5) * m_dh_um, sz.r_um[k]));
+                    sz.lens_um2.push_back(lens_area_um2(sz.r_um[k], (j + 0.5) * m_dh_um));
     }
 
     PixelModel::Moments operator()(double v) const

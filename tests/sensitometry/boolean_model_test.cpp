@@ -21,7 +21,7 @@ BooleanLayer monodisperse(double n_per_um2, double d_um, double p_develop)
     pop.develop_fraction    = p_develop;
     pop.area_developed_um2  = a * p_develop;
     pop.area2_developed_um4 = a * a * p_develop;
-    return BooleanLayer({ pop }, 0.005);
+    return BooleanLayer({ pop }, ImageOverlap(), 0.005);
 }
 
 TEST(BooleanModel, MonodisperseCovarianceIsClosedForm)

@@ -32,15 +32,6 @@ double log_poisson(uint64_t n, double lambda)
 
 }  // namespace
 
-double lens_area_um2(double r_um, double h_um)
-{
-    if (h_um >= 2.0 * r_um)
-        return 0.0;
-    const double h = std::max(0.0, h_um);
-    return 2.0 * r_um * r_um * std::acos(h / (2.0 * r_um))
-           - 0.5 * h * std::sqrt(std::max(0.0, 4.0 * r_um * r_um - h * h));
-}
-
 Status develop_by_size(const Stock& stock, const Population& pop, double exposure_lxs,
                        double shutter_s, int max_samples, uint64_t seed,
                        PopulationDevelopment& out, int min_samples)
@@ -156,16 +147,21 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
 }
 
 BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations,
-                           double h_step_um)
+                           const ImageOverlap& image, double h_step_um)
     : m_step_um(h_step_um)
 {
     double h_max = 0.0;
     for (const auto& pop : populations) {
         m_developed_per_um2 += pop.grains_per_um2 * pop.develop_fraction;
         m_area_developed += pop.grains_per_um2 * pop.area_developed_um2;
-        for (const SizeNode& node : pop.nodes)
+        double blocked = 0.0;
+        for (const SizeNode& node : pop.nodes) {
+            blocked += node.weight * node.develop_probability
+                       * image.blocking_um2(0.5 * node.diameter_um);
             if (node.weight * node.develop_probability > 1e-15)
-                h_max = std::max(h_max, node.diameter_um);
+                h_max = std::max(h_max, image.overlap_range_um(0.5 * node.diameter_um));
+        }
+        m_blocking += pop.grains_per_um2 * blocked;
     }
     const size_t steps = static_cast<size_t>(std::ceil(h_max / m_step_um)) + 2;
     m_k.assign(steps, 0.0);
@@ -175,9 +171,9 @@ BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations
         for (const auto& pop : populations) {
             double sum = 0.0;
             for (const SizeNode& node : pop.nodes)
-                if (node.diameter_um > h)
+                if (image.overlap_range_um(0.5 * node.diameter_um) > h)
                     sum += node.weight * node.develop_probability
-                           * lens_area_um2(0.5 * node.diameter_um, h);
+                           * image.overlap_um2(0.5 * node.diameter_um, h);
             k += pop.grains_per_um2 * sum;
         }
         m_k[i] = k;
@@ -205,12 +201,12 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
             return s;
         pops.push_back(std::move(d));
     }
-    out = BooleanLayer(pops);
+    out = BooleanLayer(pops, ImageOverlap(stock.layers[layer]));
     return {};
 }
 
 BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, double value,
-                              double h_step_um)
+                              const ImageOverlap& image, double h_step_um)
 {
     std::vector<PopulationDevelopment> pops;
     for (const PixelPopulation& pp : populations) {
@@ -231,7 +227,7 @@ BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, d
         }
         pops.push_back(std::move(d));
     }
-    return BooleanLayer(pops, h_step_um);
+    return BooleanLayer(pops, image, h_step_um);
 }
 
 Status exposure_for_predicted_density(const Stock& stock, size_t layer, double net_density,

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "dye.h"
 #include "filmgrain/stock.h"
 #include "filmgrain/status.h"
 
@@ -50,25 +51,27 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
                        double shutter_s, int max_samples, uint64_t seed,
                        PopulationDevelopment& out, int min_samples = 16);
 
-/// The Boolean model of one layer (MODEL.md 5): developed grains are a
-/// Poisson process of opaque discs. With K(h) = sum over populations of
-/// n E[P(d) lens(d/2, h)] (lens: overlap area of two discs of radius r
-/// whose centres are h apart), the mean transmittance is T = exp(-K(0))
-/// and the covariance of the uncovered indicator at distance h is
-/// C(h) = T^2 (exp(K(h)) - 1). K is tabulated on a fine grid of h.
+/// The Boolean model of one layer (MODEL.md 5 and 8): developed grains are
+/// a Poisson process of images, opaque discs (silver) or dye clouds. With
+/// B = sum over populations of n E[P(d) b(d/2)] and K(h) = sum of
+/// n E[P(d) k(d/2, h)] (b, k: ImageOverlap, core/src/dye.h; for silver
+/// the disc area and the lens, the overlap area of two discs of radius r
+/// whose centres are h apart, so B = K(0)), the mean transmittance is
+/// T = exp(-B) and the covariance of the point transmittance at distance h
+/// is C(h) = T^2 (exp(K(h)) - 1). K is tabulated on a fine grid of h.
 /// Thread safety: const, shareable.
 class BooleanLayer {
 public:
     BooleanLayer() = default;
     explicit BooleanLayer(const std::vector<PopulationDevelopment>& populations,
-                          double h_step_um = 0.02);
+                          const ImageOverlap& image = ImageOverlap(), double h_step_um = 0.02);
 
-    /// K(0) = sum n E[a P]: the density is 0.434 K(0) (Nutting, exact in
-    /// the mean for overlapping discs).
-    double coverage() const { return m_k.empty() ? 0.0 : m_k[0]; }
-    /// T = exp(-K(0)).
+    /// B = sum n E[b P] (silver: sum n E[a P] = K(0)): the density is
+    /// 0.434 B (Nutting, exact in the mean for overlapping discs).
+    double coverage() const { return m_blocking; }
+    /// T = exp(-B).
     double mean_transmittance() const;
-    /// Net density predicted for the layer, -log10(T) = 0.434 K(0).
+    /// Net density predicted for the layer, -log10(T) = 0.434 B.
     double net_density() const;
     /// Developed grains per square micrometre, sum n E[P].
     double developed_per_um2() const { return m_developed_per_um2; }
@@ -87,6 +90,7 @@ private:
     double m_range_um          = 0.0;
     double m_developed_per_um2 = 0.0;
     double m_area_developed    = 0.0;
+    double m_blocking          = 0.0;  ///< B
 };
 
 /// The Boolean layer of `stock.layers[layer]` for a neutral exposure
@@ -103,6 +107,7 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
 /// exposures and stocks against tables built once (filmgrain-fit). Its
 /// coverage() is coverage_exponent(populations, v) term for term.
 BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, double value,
+                              const ImageOverlap& image = ImageOverlap(),
                               double h_step_um = 0.02);
 
 /// log10 of the neutral exposure at which the predicted net density of
@@ -165,7 +170,7 @@ double siedentopf_sigma_density(double mean_grain_area_um2, double net_density,
                                 double aperture_area_um2);
 
 /// Area of the intersection of two discs of radius r_um whose centres are
-/// h_um apart (the "lens"), um^2.
-double lens_area_um2(double r_um, double h_um);
+/// h_um apart (the "lens"), um^2: the core's (dye.h).
+using filmgrain::lens_area_um2;
 
 }  // namespace filmgrain::sensitometry

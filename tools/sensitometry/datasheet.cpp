@@ -317,6 +317,15 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                       p.rate_area_exponent,
                                       ": the analytic figures need 0 (one P(develop | N) per "
                                       "population)");
+    // MODEL.md 9-10 on a uniform patch: halation adds its fraction of the
+    // light, inhibition lowers development; neither is in these figures yet.
+    for (const Layer& l : stock.layers)
+        if (l.halation != 0.0)
+            return Status::errorf("layer ", l.name, ": halation = ", l.halation,
+                                  ": the analytic figures do not model halation (MODEL.md 9)");
+    if (!stock.inhibition.empty())
+        return Status::errorf("stock '", stock.name, "': the analytic figures do not model "
+                              "development inhibitors (MODEL.md 10)");
     std::vector<int> index;
     for (const LayerTargets& t : sheet.layers) {
         const int l = find_layer(stock, t.name);
@@ -386,15 +395,19 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                 if (!(v > 0.0) || v >= c.points.back().value)
                     return Status::errorf("layer ", t.name, ": density ", density,
                                           " (granularity target) is never reached");
-                const BooleanLayer b = boolean_layer_at(ref.models[l]->populations(), v);
+                const BooleanLayer b = boolean_layer_at(ref.models[l]->populations(), v,
+                                                        ImageOverlap(stock.layers[l]));
                 const double sigma_t = std::sqrt(disc_aperture_transmittance_variance(
                     b, kGranularityApertureUm));
                 const double rms     = 1000.0 * kLog10E * sigma_t / b.mean_transmittance();
                 // C(h) = T^2 (exp K(h) - 1) scales with K to first order:
                 // the relative error of K bounds the relative error of the
                 // variance, half that of sigma.
+                // (coverage_error bounds sum n E[a P]; a dye image blocks
+                // cloud_area_factor times that.)
                 const double rel = b.coverage() > 0.0
-                                       ? 0.5 * ref.models[l]->coverage_error() / b.coverage()
+                                       ? 0.5 * ref.models[l]->coverage_error()
+                                             * cloud_area_factor(stock.layers[l]) / b.coverage()
                                        : 0.0;
                 f.granularity.push_back({ rms, rms * rel });
             }
