@@ -98,27 +98,35 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
     return {};
 }
 
+double neutral_log_factor(const Stock& stock, const std::vector<ExpectedCurve>& plain, size_t k,
+                          double value)
+{
+    if (!stock.inhibits())
+        return 0.0;
+    // The neutral grey y that gives layer k the value v: every layer j
+    // then has y * w_j.
+    const double grey = value / neutral_weight(stock.layers[k]);
+    double log_factor = 0.0;
+    for (size_t j = 0; j < plain.size(); ++j)
+        if (stock.inhibition[k][j] != 0.0)
+            log_factor += stock.inhibition[k][j]
+                          * (plain[j].density_at(grey * neutral_weight(stock.layers[j]))
+                             - plain[j].base_density);
+    return log_factor;
+}
+
 void apply_inhibition(const Stock& stock, std::vector<ExpectedCurve>& curves)
 {
     if (!stock.inhibits())
         return;
     const std::vector<ExpectedCurve> plain = curves;
     for (size_t k = 0; k < curves.size(); ++k) {
-        const double wk = neutral_weight(stock.layers[k]);
-        double error    = 0.0;
+        double error = 0.0;
         for (size_t j = 0; j < curves.size(); ++j)
             error += stock.inhibition[k][j] * plain[j].density_error;
         double largest_density = 0.0;
         for (CurvePoint& p : curves[k].points) {
-            // The neutral grey y that gives layer k the value v: every
-            // layer j then has y * w_j.
-            const double grey = p.value / wk;
-            double log_factor = 0.0;
-            for (size_t j = 0; j < curves.size(); ++j)
-                if (stock.inhibition[k][j] != 0.0)
-                    log_factor += stock.inhibition[k][j]
-                                  * (plain[j].density_at(grey * neutral_weight(stock.layers[j]))
-                                     - plain[j].base_density);
+            const double log_factor = neutral_log_factor(stock, plain, k, p.value);
             // E[T] = exp(-K) and P -> P exp(-log_factor) scale K alike.
             p.transmittance = std::pow(p.transmittance, std::exp(-log_factor));
             p.density       = density_from_transmittance(p.transmittance, curves[k].max_density,

@@ -65,6 +65,13 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
                        int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out);
 
+/// MODEL.md 10 on a large uniform neutral patch: layer k's log factor
+/// sum_j inhibition[k][j] Dbar_j where layer k has exposure value `value`
+/// (each layer j then has value * w_j / w_k, w the sensitivity sums), Dbar_j
+/// from `plain`, the curves without inhibition. 0 without inhibition.
+double neutral_log_factor(const Stock& stock, const std::vector<ExpectedCurve>& plain, size_t k,
+                          double value);
+
 /// MODEL.md 10 on expected curves: the curves of a large uniform neutral
 /// patch (a grey scale, as datasheets measure it) once inhibition acts.
 /// `curves` are the stock's curves without inhibition (expected_curves of

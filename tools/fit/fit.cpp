@@ -34,6 +34,18 @@ constexpr double kUnmeasurable = 1e6;
 /// diameter_log_sigma, log10 quantum_efficiency.
 constexpr double kLo[4] = { std::log10(0.5), std::log10(0.2), 0.05, -2.0 };
 constexpr double kHi[4] = { std::log10(15.0), std::log10(3.0), 0.8, 0.0 };
+/// Bounds of a dye layer's cloud search (MODEL.md 8): log10
+/// cloud_diameter_ratio, log10 cloud_density.
+constexpr double kCloudLo[2] = { std::log10(0.5), std::log10(0.05) };
+constexpr double kCloudHi[2] = { std::log10(3.0), std::log10(5.0) };
+/// Upper bound of a layer's self-inhibition (MODEL.md 10). On a uniform
+/// patch the density is D e^(-a D) for the uninhibited D, at most 1 / (a e):
+/// a = 1 keeps net densities up to 0.37 reachable, and higher a none that
+/// a datasheet quotes.
+constexpr double kSelfInhibitionHi = 1.0;
+/// Where it starts: 0.1 (P falls by a tenth at net density 1; net density
+/// 3.7 reachable).
+constexpr double kSelfInhibitionStart = 0.1;
 /// Bounds of the rate search, log10 per second: k_pair, k_join, k_loss.
 constexpr double kRateLo[3] = { 3.0, 2.0, -3.0 };
 constexpr double kRateHi[3] = { 12.0, 11.0, 5.0 };
@@ -181,7 +193,10 @@ public:
         while (m_stock.layers[l].name != m_sheet.layers[i].name)
             ++l;
         const size_t np = m_stock.layers[l].populations.size();
-        const size_t n  = 4 * np;
+        const bool dye  = m_stock.layers[l].image == LayerImage::dye;
+        const bool inh  = !m_stock.inhibition.empty();
+        const size_t nd = 4 * np + (dye ? 2 : 0);  // index of the inhibition
+        const size_t n  = nd + (inh ? 1 : 0);
         std::vector<double> x0(n), lo(n), hi(n);
         for (size_t p = 0; p < np; ++p) {
             get_population(m_stock.layers[l].populations[p], &x0[4 * p]);
@@ -190,6 +205,31 @@ public:
                 hi[4 * p + k] = kHi[k];
             }
         }
+        if (dye) {
+            const Layer& layer = m_stock.layers[l];
+            x0[4 * np]     = std::clamp(std::log10(layer.cloud_diameter_ratio), kCloudLo[0], kCloudHi[0]);
+            x0[4 * np + 1] = std::clamp(std::log10(layer.cloud_density), kCloudLo[1], kCloudHi[1]);
+            for (int k = 0; k < 2; ++k) {
+                lo[4 * np + k] = kCloudLo[k];
+                hi[4 * np + k] = kCloudHi[k];
+            }
+        }
+        if (inh) {
+            x0[nd] = std::clamp(m_stock.inhibition[l][l], 0.0, kSelfInhibitionHi);
+            lo[nd] = 0.0;
+            hi[nd] = kSelfInhibitionHi;
+        }
+        const auto set_layer = [&](Stock& stock, const std::vector<double>& x) {
+            Layer& layer = stock.layers[l];
+            for (size_t p = 0; p < np; ++p)
+                set_population(layer.populations[p], &x[4 * p]);
+            if (dye) {
+                layer.cloud_diameter_ratio = std::pow(10.0, x[4 * np]);
+                layer.cloud_density        = std::pow(10.0, x[4 * np + 1]);
+            }
+            if (inh)
+                stock.inhibition[l][l] = x[nd];
+        };
         // Tables at 1/100 s for the current rates: built once here.
         DevelopModels models(m_stock, m_options.search_curve);
         sm::FigureOptions fo;
@@ -197,8 +237,7 @@ public:
         fo.reciprocity = false;
         Stock trial    = m_stock;
         const auto objective = [&](const std::vector<double>& x) {
-            for (size_t p = 0; p < np; ++p)
-                set_population(trial.layers[l].populations[p], &x[4 * p]);
+            set_layer(trial, x);
             sm::DatasheetFigures f;
             ++m_evaluations;
             if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
@@ -254,8 +293,7 @@ public:
             if (best_j < 1e-4)
                 break;
         }
-        for (size_t p = 0; p < np; ++p)
-            set_population(m_stock.layers[l].populations[p], &best[4 * p]);
+        set_layer(m_stock, best);
         return {};
     }
 
@@ -343,6 +381,34 @@ private:
     int& m_evaluations;
 };
 
+/// Whether the fitted stock has inhibition: options.inhibition, else on for
+/// a colour negative datasheet.
+bool fitted_inhibition(const sm::Datasheet& sheet, const FitOptions& options)
+{
+    if (options.inhibition)
+        return *options.inhibition;
+    return sheet.kind == "colour-negative";
+}
+
+/// The inhibition the search starts from: kSelfInhibitionStart in every
+/// layer, none between layers.
+void start_inhibition(const FitOptions& options, Stock& stock)
+{
+    stock.inhibition.assign(stock.layers.size(), std::vector<double>(stock.layers.size(), 0.0));
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        stock.inhibition[l][l] = kSelfInhibitionStart;
+    stock.inhibitor_diffusion_um = options.inhibitor_diffusion_um;
+}
+
+/// The image the fitted layers get: options.image, else dye for a colour
+/// negative datasheet.
+LayerImage fitted_image(const sm::Datasheet& sheet, const FitOptions& options)
+{
+    if (options.image)
+        return *options.image;
+    return sheet.kind == "colour-negative" ? LayerImage::dye : LayerImage::silver;
+}
+
 }  // namespace
 
 Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stock& out)
@@ -367,6 +433,14 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
         Layer l;
         l.name        = t.name;
         l.sensitivity = luma_or_primary(t.name);
+        // Dye clouds start as large as their grain, of density 1 (they
+        // block 90% of what an opaque disc would).
+        l.image = fitted_image(sheet, options);
+        if (l.image == LayerImage::dye) {
+            l.cloud_profile        = options.cloud_profile;
+            l.cloud_diameter_ratio = 1.0;
+            l.cloud_density        = 1.0;
+        }
         l.populations.clear();
         // Siedentopf: sigma_D^2 = 0.434 a D / A gives the mean developed
         // grain area a at the first granularity target (default: RMS 10
@@ -397,6 +471,8 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
         }
         s.layers.push_back(l);
     }
+    if (fitted_inhibition(sheet, options))
+        start_inhibition(options, s);
     if (Status st = s.validate(); !st)
         return st;
     out = s;
@@ -429,6 +505,21 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     Stock stock;
     if (options.start) {
         stock = *options.start;
+        if (options.image)
+            for (Layer& l : stock.layers)
+                if (l.image != *options.image) {
+                    l.image = *options.image;
+                    if (l.image == LayerImage::dye) {
+                        l.cloud_profile        = options.cloud_profile;
+                        l.cloud_diameter_ratio = 1.0;
+                        l.cloud_density        = 1.0;
+                    }
+                }
+        if (options.inhibition && *options.inhibition != stock.inhibits()) {
+            stock.inhibition.clear();
+            if (*options.inhibition)
+                start_inhibition(options, stock);
+        }
         if (Status s = stock.validate(); !s)
             return s;
     } else if (Status s = initial_stock(sheet, options, stock); !s) {

@@ -9,7 +9,9 @@
 // The search alternates two stages, each a derivative-free bounded search
 // (NLopt's Sbplx, Rowan's subplex: deterministic):
 //  A. populations, per layer, with the rates fixed: speed, slope and
-//     granularity at 1/100 s. The P(develop | N) table depends only on the
+//     granularity at 1/100 s (for a dye layer also its clouds' diameter
+//     ratio and density, MODEL.md 8, and with inhibition its
+//     self-inhibition, MODEL.md 10). The P(develop | N) table depends only on the
 //     rates, the shutter and the development (MODEL.md 3-4), so it is
 //     built once and every candidate costs a few milliseconds.
 //  B. rates, with the populations fixed: the reciprocity figures (a table
@@ -77,6 +79,22 @@ struct FitOptions {
     /// A starting stock instead of the physical guess (its populations and
     /// rates; its layers must be the datasheet's).
     std::optional<Stock> start;
+    /// The layers' image (MODEL.md 8): silver discs, or dye clouds of
+    /// `cloud_profile` whose cloud_diameter_ratio and cloud_density are
+    /// searched with the populations (per layer). Unset: dye for a colour
+    /// negative datasheet, silver for black and white (a --start stock's
+    /// own images are then kept).
+    std::optional<LayerImage> image;
+    CloudProfile cloud_profile = CloudProfile::gaussian;
+    /// Development inhibitors (MODEL.md 10, DIR couplers): each layer's
+    /// self-inhibition inhibition[l][l] is searched with its populations
+    /// (in [0, 1]; it lowers development where the layer is dense, the only
+    /// way the model's granularity can fall with density), with the
+    /// diffusion below (no datasheet figure measures it: a choice, 20 um).
+    /// Unset: on for a colour negative datasheet, off for black and white
+    /// (a --start stock's own inhibition is then kept).
+    std::optional<bool> inhibition;
+    double inhibitor_diffusion_um = 20.0;
     /// Progress lines (nullptr: silent).
     std::function<void(const std::string&)> progress;
 };

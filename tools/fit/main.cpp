@@ -52,6 +52,19 @@ void usage(std::ostream& os)
        << d.rounds
        << ")\n"
           "  --no-rates         keep the starting rates (MODEL.md 7's, or --start's)\n"
+          "  --image silver|dye the layers' image (MODEL.md 8); dye searches each layer's\n"
+          "                     cloud_diameter_ratio and cloud_density too (default: dye\n"
+          "                     for a colour negative datasheet, silver for black and\n"
+          "                     white; with --start, the start stock's own)\n"
+          "  --cloud-profile disc|gaussian  dye clouds' profile (default "
+       << filmgrain::cloud_profile_name(d.cloud_profile)
+       << ")\n"
+          "  --inhibition, --no-inhibition  search each layer's self-inhibition (MODEL.md\n"
+          "                     10, diffusion "
+       << d.inhibitor_diffusion_um
+       << " um) or fit none (default: on for a colour negative\n"
+          "                     datasheet, off for black and white; with --start, the\n"
+          "                     start stock's own)\n"
           "  --start STOCK      start from this stock (file or preset) instead of the\n"
           "                     physical guess\n"
           "  --name NAME        name of the fitted stock (default: the datasheet's)\n"
@@ -190,6 +203,26 @@ int main(int argc, char** argv)
             check = true;
         } else if (a == "--no-rates") {
             opt.fit_rates = false;
+        } else if (a == "--image") {
+            const std::string v = next("silver or dye");
+            if (v != "silver" && v != "dye") {
+                std::cerr << "filmgrain-fit: --image " << v << ": must be silver or dye\n";
+                return 2;
+            }
+            opt.image = v == "dye" ? filmgrain::LayerImage::dye : filmgrain::LayerImage::silver;
+        } else if (a == "--cloud-profile") {
+            const std::string v = next("disc or gaussian");
+            if (v != "disc" && v != "gaussian") {
+                std::cerr << "filmgrain-fit: --cloud-profile " << v
+                          << ": must be disc or gaussian\n";
+                return 2;
+            }
+            opt.cloud_profile = v == "disc" ? filmgrain::CloudProfile::disc
+                                            : filmgrain::CloudProfile::gaussian;
+        } else if (a == "--inhibition") {
+            opt.inhibition = true;
+        } else if (a == "--no-inhibition") {
+            opt.inhibition = false;
         } else if (a == "--start") {
             start_path = next("a stock");
         } else if (a == "--name") {

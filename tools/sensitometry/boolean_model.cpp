@@ -206,7 +206,8 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
 }
 
 BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, double value,
-                              const ImageOverlap& image, double h_step_um)
+                              const ImageOverlap& image, double develop_factor,
+                              double h_step_um)
 {
     std::vector<PopulationDevelopment> pops;
     for (const PixelPopulation& pp : populations) {
@@ -218,8 +219,9 @@ BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, d
             SizeNode node;
             node.diameter_um         = 2.0 * r_um;
             node.weight              = q.weight;
-            node.develop_probability = pixel_develop_probability(
-                pp, pp.photons_per_value_um2 * value * a_um2);
+            node.develop_probability = develop_factor
+                                       * pixel_develop_probability(
+                                           pp, pp.photons_per_value_um2 * value * a_um2);
             d.develop_fraction += node.weight * node.develop_probability;
             d.area_developed_um2 += node.weight * a_um2 * node.develop_probability;
             d.area2_developed_um4 += node.weight * a_um2 * a_um2 * node.develop_probability;

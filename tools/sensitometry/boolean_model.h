@@ -106,9 +106,11 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
 /// (pixel_develop_probability). No chain runs: for evaluating many
 /// exposures and stocks against tables built once (filmgrain-fit). Its
 /// coverage() is coverage_exponent(populations, v) term for term.
+/// `develop_factor` scales every P(develop) (MODEL.md 10's inhibition on a
+/// uniform patch: exp(-log_factor)).
 BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, double value,
                               const ImageOverlap& image = ImageOverlap(),
-                              double h_step_um = 0.02);
+                              double develop_factor = 1.0, double h_step_um = 0.02);
 
 /// log10 of the neutral exposure at which the predicted net density of
 /// `layer` (fog included, base excluded) equals `net_density`: steps of 0.5

@@ -15,6 +15,7 @@
 #include "analysis.h"
 #include "boolean_model.h"
 #include "expected_curve_model.h"
+#include "inhibition.h"
 
 namespace filmgrain::sensitometry {
 
@@ -209,11 +210,13 @@ double sensitivity_sum(const Layer& layer)
 constexpr double kStopsPerDecade = 3.3219280948873623;
 constexpr double kLog10E         = 0.43429448190325176;
 
-/// The curve of every stock layer at `shutter_s`, with its LayerModel kept
-/// for granularity.
+/// The curve of every stock layer at `shutter_s` on a uniform neutral patch
+/// (MODEL.md 10's inhibition included), with its LayerModel and the curves
+/// without inhibition kept for granularity.
 struct Curves {
     std::vector<std::unique_ptr<LayerModel>> models;
     std::vector<ExpectedCurve> curves;
+    std::vector<ExpectedCurve> plain;  ///< without inhibition
 };
 
 Curves curves_at(const Stock& stock, double shutter_s, DevelopModels& models)
@@ -223,8 +226,10 @@ Curves curves_at(const Stock& stock, double shutter_s, DevelopModels& models)
     Curves c;
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         c.models.push_back(std::make_unique<LayerModel>(stock, l, scene, models));
-        c.curves.push_back(expected_curve(stock, l, *c.models.back(), false));
+        c.plain.push_back(expected_curve(stock, l, *c.models.back(), false));
     }
+    c.curves = c.plain;
+    apply_inhibition(stock, c.curves);
     return c;
 }
 
@@ -317,15 +322,13 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                       p.rate_area_exponent,
                                       ": the analytic figures need 0 (one P(develop | N) per "
                                       "population)");
-    // MODEL.md 9-10 on a uniform patch: halation adds its fraction of the
-    // light, inhibition lowers development; neither is in these figures yet.
+    // MODEL.md 9 on a uniform patch: halation adds its fraction of the
+    // light, which these figures do not model yet (scatter moves light
+    // within the patch: no change).
     for (const Layer& l : stock.layers)
         if (l.halation != 0.0)
             return Status::errorf("layer ", l.name, ": halation = ", l.halation,
                                   ": the analytic figures do not model halation (MODEL.md 9)");
-    if (!stock.inhibition.empty())
-        return Status::errorf("stock '", stock.name, "': the analytic figures do not model "
-                              "development inhibitors (MODEL.md 10)");
     std::vector<int> index;
     for (const LayerTargets& t : sheet.layers) {
         const int l = find_layer(stock, t.name);
@@ -395,8 +398,10 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                 if (!(v > 0.0) || v >= c.points.back().value)
                     return Status::errorf("layer ", t.name, ": density ", density,
                                           " (granularity target) is never reached");
-                const BooleanLayer b = boolean_layer_at(ref.models[l]->populations(), v,
-                                                        ImageOverlap(stock.layers[l]));
+                // MODEL.md 10: P -> P exp(-log_factor) for every grain.
+                const BooleanLayer b = boolean_layer_at(
+                    ref.models[l]->populations(), v, ImageOverlap(stock.layers[l]),
+                    std::exp(-neutral_log_factor(stock, ref.plain, l, v)));
                 const double sigma_t = std::sqrt(disc_aperture_transmittance_variance(
                     b, kGranularityApertureUm));
                 const double rms     = 1000.0 * kLog10E * sigma_t / b.mean_transmittance();
