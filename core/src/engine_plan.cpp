@@ -616,16 +616,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         if (settings.coverage_samples > 0)  // samples=N (not for exact: validated)
             plan.dye_samples = settings.coverage_samples;
         plan.error_estimate *= cloud_area_factor(layer);
-        std::ostringstream why;
-        why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
-            << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
-            << format_g(layer.cloud_density) << "): 10^-D "
-            << (layer.cloud_profile == CloudProfile::disc ? "exact along " : "sampled at ")
-            << plan.dye_samples
-            << (layer.cloud_profile == CloudProfile::disc ? " rows" : "x" + std::to_string(plan.dye_samples) + " points")
-            << " per pixel (per-pixel density error measured in core Dye.SamplingConverges, not in "
-               "the error estimate); ";
-        plan.reason += why.str();
     }
 
     // Coverage of the layers whose grains all run the fast kernel (and of
@@ -662,25 +652,27 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         const bool curves = all_curves(plan);
         if (settings.scale == ScaleMethod::grain || (!settings.scale && !curves))
             continue;
-        if (plan.inhibition || plan.dye_samples > 0) {
-            // The pixel statistics are tabulated over exposure alone, for
-            // opaque discs: an inhibited layer's P also depends on its
-            // neighbourhood, and dye clouds add their densities.
+        if (plan.inhibition) {
+            // The pixel statistics are tabulated over exposure alone: an
+            // inhibited layer's P also depends on its neighbourhood.
             if (!settings.scale)
                 continue;
-            return Status::errorf("scale=pixel: layer '", layer.name, "' ",
-                                  plan.inhibition ? "is inhibited (MODEL.md 10)"
-                                                  : "forms dye clouds (MODEL.md 8)",
-                                  ", which the pixel statistics do not model: use scale=grain");
+            return Status::errorf("scale=pixel: layer '", layer.name,
+                                  "' is inhibited (MODEL.md 10), which the pixel statistics do "
+                                  "not model: use scale=grain");
         }
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
                                   "' needs P(develop | mean photons) for every population, which "
                                   "kinetics=chain|early|table, grains=exact and populations with "
                                   "rate_area_exponent != 0 do not have: use scale=grain");
+        // Each developed grain's image (MODEL.md 5 or 8): its blocking area
+        // and overlap enter the statistics; the image (a silver disc, a dye
+        // cloud to its reach) must fit in a pixel.
+        const ImageOverlap image(layer);
         double largest_um = 0.0;
         for (const PopulationPlan& pp : plan.populations)
-            largest_um = std::max(largest_um, 2.0 * pp.grains.radius_at_z_um(4.0));
+            largest_um = std::max(largest_um, image.overlap_range_um(pp.grains.radius_at_z_um(4.0)));
         const double pitch_um = std::min(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
         if (!settings.scale && largest_um > pitch_um)
             continue;
@@ -691,16 +683,18 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                              plan.populations[p].photons_per_value_um2,
                              plan.populations[p].curve.get(), plan.populations[p].table.get() });
         auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
-                                                        frame.scan_pitch_y_um);
+                                                        frame.scan_pitch_y_um, image);
         const double fog_grains = model->at(0.0).developed_per_pixel;
         if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
             continue;
         plan.pixel_model = std::move(model);
         plan.pixel_key   = hash_ids(grain_seed(scene), 0x9133, l);
+        plan.dye_samples = 0;  // no per-grain image
         plan.setup_seconds
             += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::ostringstream why;
-        why << "pixel scale: grains up to " << format_g(largest_um) << " um in "
+        why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
+            << " up to " << format_g(largest_um) << " um in "
             << format_g(pitch_um) << " um pixels, " << format_g(fog_grains)
             << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
                "(interpolation error: mean "
@@ -729,8 +723,29 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 << " um; expected densities from the expected curves, error of the log factor <= "
                 << format_g(inhibition.error) << "); ";
         }
-        if (plan.dye_samples > 0)
-            path << "image=dye:" << plan.dye_samples << " ";
+        const Layer& layer = stock.layers[l];
+        if (layer.image == LayerImage::dye) {
+            // MODEL.md 8: per grain, the mean of 10^-D over each pixel; at
+            // pixel scale, the clouds' blocking area and overlap.
+            path << "image=dye";
+            why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
+                << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
+                << format_g(layer.cloud_density) << "): ";
+            if (plan.dye_samples > 0) {
+                path << ":" << plan.dye_samples;
+                why << "10^-D "
+                    << (layer.cloud_profile == CloudProfile::disc ? "exact along " : "sampled at ")
+                    << plan.dye_samples
+                    << (layer.cloud_profile == CloudProfile::disc
+                            ? " rows"
+                            : "x" + std::to_string(plan.dye_samples) + " points")
+                    << " per pixel (per-pixel density error measured in core "
+                       "Dye.SamplingConverges, not in the error estimate); ";
+            } else {
+                why << "their blocking area and overlap in the pixel statistics; ";
+            }
+            path << " ";
+        }
         if (plan.pixel_model) {
             path << "scale=pixel kinetics=curve exposure=box";
             plan.path = path.str();

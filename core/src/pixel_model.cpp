@@ -66,11 +66,12 @@ double coverage_exponent(const std::vector<PixelPopulation>& populations, double
 
 namespace {
 
-/// The quadrature and the lens areas of a layer's populations, prepared once.
+/// The quadrature and the image overlaps of a layer's populations, prepared once.
 class Integrator {
 public:
-    Integrator(const std::vector<PixelPopulation>& pops, double px_um, double py_um)
-        : m_pops(pops), m_px_um(px_um), m_py_um(py_um)
+    Integrator(const std::vector<PixelPopulation>& pops, double px_um, double py_um,
+               const ImageOverlap& image)
+        : m_pops(pops), m_image(image), m_px_um(px_um), m_py_um(py_um)
     {
         double h_max_um = 0.0;
         for (const PixelPopulation& p : pops) {
@@ -79,10 +80,10 @@ public:
                 const double r_um = p.grains->radius_at_z_um(node.z);
                 sz.r_um.push_back(r_um);
                 sz.w.push_back(node.weight);
-                // Lens areas out to the largest grain that carries weight
+                // Overlaps out to the largest image that carries weight
                 // (z = 9 would stretch the distance grid for nothing).
                 if (node.weight > 1e-15)
-                    h_max_um = std::max(h_max_um, 2.0 * r_um);
+                    h_max_um = std::max(h_max_um, image.overlap_range_um(r_um));
             }
             m_sizes.push_back(std::move(sz));
         }
@@ -90,7 +91,7 @@ public:
         for (Sizes& sz : m_sizes)
             for (size_t k = 0; k < sz.r_um.size(); ++k)
                 for (int j = 0; j < kDistanceNodes; ++j)
-                    sz.lens_um2.push_back(lens_area_um2(sz.r_um[k], (j + 0.5) * m_dh_um));
+                    sz.overlap_um2.push_back(image.overlap_um2(sz.r_um[k], (j + 0.5) * m_dh_um));
     }
 
     PixelModel::Moments operator()(double v) const
@@ -106,11 +107,11 @@ public:
                 const double a_um2 = M_PI * sz.r_um[k] * sz.r_um[k];
                 const double pd = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
                 const double nw = n * sz.w[k] * pd;
-                exponent += nw * a_um2;
+                exponent += nw * m_image.blocking_um2(sz.r_um[k]);
                 developed += nw;
-                const double* lens = &sz.lens_um2[k * kDistanceNodes];
+                const double* overlap = &sz.overlap_um2[k * kDistanceNodes];
                 for (int j = 0; j < kDistanceNodes; ++j)
-                    g[static_cast<size_t>(j)] += nw * lens[j];
+                    g[static_cast<size_t>(j)] += nw * overlap[j];
             }
         }
         m.mean = std::exp(-exponent);
@@ -141,9 +142,10 @@ public:
 
 private:
     struct Sizes {
-        std::vector<double> r_um, w, lens_um2;  // lens_um2: [size node][distance node]
+        std::vector<double> r_um, w, overlap_um2;  // [size node][distance node]
     };
     const std::vector<PixelPopulation>& m_pops;
+    const ImageOverlap& m_image;
     double m_px_um, m_py_um, m_dh_um = 0.0;
     std::vector<Sizes> m_sizes;
 };
@@ -159,15 +161,16 @@ PixelModel::Moments lerp(const PixelModel::Moments& a, const PixelModel::Moments
 }  // namespace
 
 PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& populations,
-                                        double px_um, double py_um, double v)
+                                        double px_um, double py_um, double v,
+                                        const ImageOverlap& image)
 {
-    return Integrator(populations, px_um, py_um)(v);
+    return Integrator(populations, px_um, py_um, image)(v);
 }
 
 PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,
-                       double py_um)
+                       double py_um, const ImageOverlap& image)
 {
-    const Integrator moments(populations, px_um, py_um);
+    const Integrator moments(populations, px_um, py_um, image);
     const int n   = (kOctavesBelow + kOctavesAbove) * kPerOctave;
     m_log_v0      = std::log(kGrey) - kOctavesBelow * std::log(2.0);
     const double step = std::log(2.0) / kPerOctave;

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "develop_curve.h"
+#include "dye.h"
 #include "geometry.h"
 #include "filmgrain/stock.h"
 
@@ -83,7 +84,12 @@ public:
     /// Tabulates the moments of one layer's pixels (pitch px x py um) over
     /// exposure values: v = 0, then 16 nodes per octave from 2^-16 to 2^12
     /// times grey (0.18); a property of the scene, never of the pixels.
-    PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um);
+    /// `image`: what each developed grain leaves (MODEL.md 5 or 8): with
+    /// b and k its blocking area and overlap, mu = exp(-sum n E[P b]) and
+    /// C(h) = mu^2 (exp(sum n E[P k(h)]) - 1) (for silver, the disc area and
+    /// the lens K above).
+    PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um,
+               const ImageOverlap& image = ImageOverlap());
 
     /// Moments at exposure value v (linear interpolation in log v; v beyond
     /// the table: its last node).
@@ -91,7 +97,7 @@ public:
 
     /// Moments computed directly (no table): for tests and the table.
     static Moments compute(const std::vector<PixelPopulation>& populations, double px_um,
-                           double py_um, double v);
+                           double py_um, double v, const ImageOverlap& image = ImageOverlap());
 
     /// Largest relative error of the table's interpolation found at node
     /// midpoints, in the mean and in the standard deviation.
