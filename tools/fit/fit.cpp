@@ -547,6 +547,45 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     return {};
 }
 
+std::vector<std::string> model_limits(const sm::Datasheet& sheet, bool inhibited)
+{
+    std::vector<std::string> out;
+    for (const sm::LayerTargets& t : sheet.layers) {
+        // The worst falling pair (one reading: net or gross alike, by
+        // density as the datasheet states them).
+        double worst = 0.0;
+        const sm::GranularityTarget* a = nullptr;
+        const sm::GranularityTarget* b = nullptr;
+        for (const sm::GranularityTarget& lo : t.granularity)
+            for (const sm::GranularityTarget& hi : t.granularity)
+                if (lo.net == hi.net && lo.density < hi.density && lo.rms > hi.rms) {
+                    const double miss = (lo.rms - hi.rms) / (lo.rms + hi.rms);
+                    if (miss > worst) {
+                        worst = miss;
+                        a     = &lo;
+                        b     = &hi;
+                    }
+                }
+        // Reachable within the tolerance (a bound equal to it, up to the
+        // rounding of the targets' difference, is reachable at it).
+        if (!a || !(worst > sm::Tolerances().granularity_rel + 1e-12))
+            continue;
+        std::ostringstream o;
+        o << t.name << " RMS granularity falls from " << format(a->rms) << " at "
+          << (a->net ? "net " : "") << "D " << format(a->density) << " to " << format(b->rms)
+          << " at " << (b->net ? "net " : "") << "D " << format(b->density) << ": "
+          << (inhibited ? "the model's granularity can fall only through inhibition (MODEL.md "
+                          "10); without it, "
+                        : "")
+          << "it grows with density (every P(develop) grows with exposure), so at least one of "
+             "the two misses by "
+          << format(100.0 * worst, 3) << "% or more (tolerance "
+          << format(100.0 * sm::Tolerances().granularity_rel, 3) << "%)";
+        out.push_back(o.str());
+    }
+    return out;
+}
+
 std::string comparison_table(const std::vector<sm::Comparison>& comparisons)
 {
     std::ostringstream o;

@@ -124,6 +124,18 @@ Status measure(const Stock& stock, const sensitometry::Datasheet& sheet,
                const ExpectedCurveOptions& curve, sensitometry::DatasheetFigures& figures,
                std::vector<sensitometry::Comparison>& comparisons);
 
+/// What no stock of the model can reach within the tolerances, from the
+/// datasheet alone (one sentence each; empty if nothing). Granularity:
+/// without inhibition every
+/// P(develop) grows with exposure, so K(h), the Boolean model's aperture
+/// variance and the granularity grow with density; targets that fall
+/// between densities a < b (t_a > t_b) then miss by at least
+/// (t_a - t_b) / (t_a + t_b) (at best both are read as 2 t_a t_b / (t_a +
+/// t_b)). With inhibition (MODEL.md 10) development is thinned where the
+/// layer is dense and the granularity can fall, at the cost of the curve's
+/// shoulder. `inhibited`: whether the stock has inhibition.
+std::vector<std::string> model_limits(const sensitometry::Datasheet& sheet, bool inhibited);
+
 /// A Markdown table of the comparisons (target, achieved, error, miss,
 /// tolerance, met).
 std::string comparison_table(const std::vector<sensitometry::Comparison>& comparisons);

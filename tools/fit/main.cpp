@@ -311,7 +311,11 @@ int main(int argc, char** argv)
     int missed              = 0;
     for (const auto& c : comparisons)
         missed += c.met() ? 0 : 1;
+    const std::vector<std::string> limits
+        = filmgrain::fit::model_limits(sheet, stock.inhibits());
     std::cout << table;
+    for (const std::string& l : limits)
+        std::cout << "model limit: " << l << "\n";
     std::cout << (missed ? std::to_string(missed) + " of " + std::to_string(comparisons.size())
                                + " figures missed their tolerance"
                          : "every figure within tolerance (" + std::to_string(comparisons.size())
@@ -333,6 +337,11 @@ int main(int argc, char** argv)
         md << table << "\n"
            << (missed ? "**" + std::to_string(missed) + " figures missed** (above).\n"
                       : "Every figure is within the issue's tolerance.\n");
+        if (!limits.empty()) {
+            md << "\n## What the model cannot reach\n\n";
+            for (const std::string& l : limits)
+                md << "- " << l << ".\n";
+        }
         nlohmann::json j = figures_json(figures, comparisons);
         j["stock"]       = nlohmann::json::parse(filmgrain::stock_to_json(stock));
         j["fit_seconds"] = fit_seconds;
