@@ -34,18 +34,22 @@ double pixel_develop_probability(const PixelPopulation& p, double lambda)
     return p.table->probability(static_cast<uint64_t>(std::llround(n)));
 }
 
-std::vector<SizeNode> size_quadrature(const Population& population)
+const std::vector<SizeNode>& size_quadrature(const Population& population)
 {
-    if (!(population.diameter_log_sigma > 0.0))
-        return { SizeNode { 0.0, 1.0 } };
-    std::vector<SizeNode> nodes(kSizeNodes);
-    const double dz = 2.0 * kSizeZ / (kSizeNodes - 1);
-    for (int k = 0; k < kSizeNodes; ++k) {
-        const double z = -kSizeZ + k * dz;
-        const double w = std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * dz;
-        nodes[static_cast<size_t>(k)] = { z, (k == 0 || k == kSizeNodes - 1) ? 0.5 * w : w };
-    }
-    return nodes;
+    // Two fixed rules, made once (the expected curves ask for them at every
+    // exposure they evaluate).
+    static const std::vector<SizeNode> single { SizeNode { 0.0, 1.0 } };
+    static const std::vector<SizeNode> trapezoid = [] {
+        std::vector<SizeNode> nodes(kSizeNodes);
+        const double dz = 2.0 * kSizeZ / (kSizeNodes - 1);
+        for (int k = 0; k < kSizeNodes; ++k) {
+            const double z = -kSizeZ + k * dz;
+            const double w = std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * dz;
+            nodes[static_cast<size_t>(k)] = { z, (k == 0 || k == kSizeNodes - 1) ? 0.5 * w : w };
+        }
+        return nodes;
+    }();
+    return population.diameter_log_sigma > 0.0 ? trapezoid : single;
 }
 
 double coverage_exponent(const std::vector<PixelPopulation>& populations, double v)

@@ -62,7 +62,7 @@ struct SizeNode {
     double z      = 0.0;
     double weight = 0.0;
 };
-std::vector<SizeNode> size_quadrature(const Population& population);
+const std::vector<SizeNode>& size_quadrature(const Population& population);
 
 /// The Boolean model's coverage exponent of a layer at exposure value v
 /// (MODEL.md 5): sum over populations of grains_per_um2 E[a P(develop |

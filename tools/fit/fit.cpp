@@ -24,8 +24,14 @@ namespace {
 constexpr double kStopsPerDecade = 3.3219280948873623;
 constexpr double kLog10E         = 0.43429448190325176;
 /// What an objective returns for a candidate that cannot be measured (its
-/// curve never reaches a target density): far above any measurable one.
+/// curve never reaches a target density): far above any measurable one,
+/// and growing with the density it lacks, so that a search that starts or
+/// strays there finds its way back.
 constexpr double kUnmeasurable = 1e6;
+double unmeasurable(const Stock& stock, const sm::Datasheet& sheet, DevelopModels& models)
+{
+    return kUnmeasurable * (1.0 + sm::density_shortfall(stock, sheet, models));
+}
 
 /// Bounds of the population search (real emulsion scale; the stock
 /// format's ranges are wider; at most 15 grains per um^2 per population,
@@ -241,7 +247,7 @@ public:
             sm::DatasheetFigures f;
             ++m_evaluations;
             if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
-                return kUnmeasurable;
+                return unmeasurable(trial, m_sheet, models);
             return layer_objective(m_sheet, i, f, trial.layer_base_density(l));
         };
         std::vector<double> best = x0;
@@ -340,7 +346,7 @@ public:
             sm::DatasheetFigures f;
             ++m_evaluations;
             if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
-                return kUnmeasurable;
+                return unmeasurable(trial, m_sheet, models);
             const double j = reciprocity_objective(m_sheet, f);
             if (j < best_j) {
                 best_j = j;

@@ -165,17 +165,24 @@ BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations
     }
     const size_t steps = static_cast<size_t>(std::ceil(h_max / m_step_um)) + 2;
     m_k.assign(steps, 0.0);
+    // Per node, once: its radius, its weight n w P and how far it reaches.
+    struct Term {
+        double r_um, weight, range_um;
+    };
+    std::vector<Term> terms;
+    for (const auto& pop : populations)
+        for (const SizeNode& node : pop.nodes) {
+            const double w = pop.grains_per_um2 * node.weight * node.develop_probability;
+            if (w > 0.0)
+                terms.push_back({ 0.5 * node.diameter_um, w,
+                                  image.overlap_range_um(0.5 * node.diameter_um) });
+        }
     for (size_t i = 0; i < steps; ++i) {
         const double h = static_cast<double>(i) * m_step_um;
         double k = 0.0;
-        for (const auto& pop : populations) {
-            double sum = 0.0;
-            for (const SizeNode& node : pop.nodes)
-                if (image.overlap_range_um(0.5 * node.diameter_um) > h)
-                    sum += node.weight * node.develop_probability
-                           * image.overlap_um2(0.5 * node.diameter_um, h);
-            k += pop.grains_per_um2 * sum;
-        }
+        for (const Term& t : terms)
+            if (t.range_um > h)
+                k += t.weight * image.overlap_um2(t.r_um, h);
         m_k[i] = k;
     }
     m_range_um = 0.0;

@@ -453,6 +453,28 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
     return {};
 }
 
+double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models)
+{
+    const bool iso5800    = sheet.speed_standard == "ISO 5800";
+    const double crit_net = iso5800 ? kIso5800SpeedNetDensity : kIso6SpeedNetDensity;
+    const Curves ref      = curves_at(stock, kDatasheetShutterS, models);
+    double shortfall      = 0.0;
+    for (const LayerTargets& t : sheet.layers) {
+        const int l = find_layer(stock, t.name);
+        if (l < 0)
+            continue;
+        const ExpectedCurve& c = ref.curves[static_cast<size_t>(l)];
+        double largest = c.min_density();
+        for (const CurvePoint& p : c.points)
+            largest = std::max(largest, p.density);
+        double needed = c.min_density() + crit_net;
+        for (const GranularityTarget& g : t.granularity)
+            needed = std::max(needed, g.net ? c.min_density() + g.density : g.density);
+        shortfall = std::max(shortfall, needed - largest);
+    }
+    return std::max(0.0, shortfall);
+}
+
 std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetFigures& fig,
                                         const Tolerances& tol)
 {

@@ -128,6 +128,13 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                  DevelopModels& models, const FigureOptions& options,
                                  DatasheetFigures& out);
 
+/// How far `stock` falls short of the densities `sheet`'s targets need
+/// (each layer's speed point and granularity densities) at 1/100 s: the
+/// largest needed density less the layer's largest, over the datasheet's
+/// layers, or 0 when every one is reached. What a search minimises while
+/// measure_datasheet_figures cannot measure a candidate.
+double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models);
+
 /// log10 of the neutral exposure at which `curve` (of a layer with
 /// sensitivity sum `sensitivity_sum`) reaches `density`, or NaN.
 double log10_exposure_at_density(const ExpectedCurve& curve, double sensitivity_sum,
