@@ -370,7 +370,7 @@ void BM_PixelModelDraw(benchmark::State& state)
     for (size_t i = 0; i < v.size(); ++i)
         v[i] = 0.01 * static_cast<double>(i % 100);
     for (auto _ : state) {
-        sample_pixel_transmittance(model, 1, 0, 0, 64, 64, v.data(), t.data());
+        sample_pixel_transmittance(model, 1, 0, 0, 64, 64, v.data(), nullptr, t.data());
         benchmark::DoNotOptimize(t.data());
     }
     state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 64 * 64));

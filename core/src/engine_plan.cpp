@@ -652,15 +652,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         const bool curves = all_curves(plan);
         if (settings.scale == ScaleMethod::grain || (!settings.scale && !curves))
             continue;
-        if (plan.inhibition) {
-            // The pixel statistics are tabulated over exposure alone: an
-            // inhibited layer's P also depends on its neighbourhood.
-            if (!settings.scale)
-                continue;
-            return Status::errorf("scale=pixel: layer '", layer.name,
-                                  "' is inhibited (MODEL.md 10), which the pixel statistics do "
-                                  "not model: use scale=grain");
-        }
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
                                   "' needs P(develop | mean photons) for every population, which "
@@ -682,8 +673,13 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pops.push_back({ &layer.populations[p], &plan.populations[p].grains,
                              plan.populations[p].photons_per_value_um2,
                              plan.populations[p].curve.get(), plan.populations[p].table.get() });
+        // An inhibited layer (MODEL.md 10): its statistics over the log
+        // factor too, up to the stock's bound on it.
+        const double max_log_factor
+            = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
         auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
-                                                        frame.scan_pitch_y_um, image);
+                                                        frame.scan_pitch_y_um, image,
+                                                        max_log_factor);
         const double fog_grains = model->at(0.0).developed_per_pixel;
         if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
             continue;
@@ -700,7 +696,12 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                "(interpolation error: mean "
             << format_g(plan.pixel_model->max_mean_error()) << ", sd "
             << format_g(plan.pixel_model->max_sd_error())
-            << "), a Gamma law through a Gaussian copula with the neighbour correlations; ";
+            << "), a Gamma law through a Gaussian copula with the neighbour correlations"
+            << (plan.inhibition ? ", every P thinned by the inhibitors' factor at the pixel's "
+                                  "centre (tabulated to log factor "
+                                      + format_g(max_log_factor) + ")"
+                                : "")
+            << "; ";
         plan.reason += why.str();
     }
 

@@ -28,6 +28,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
     out = InhibitionPlan {};
     const size_t nl = stock.layers.size();
     out.log_factor.assign(nl, nullptr);
+    out.max_log_factor.assign(nl, 0.0);
     if (!stock.inhibits())
         return {};
     // Dbar_j comes from the curves without inhibition (MODEL.md 10: "the
@@ -81,6 +82,12 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         if (!any)
             continue;
         out.error = std::max(out.error, error);
+        for (size_t j = 0; j < nl; ++j) {
+            double largest = 0.0;
+            for (const CurvePoint& p : curves[j].points)
+                largest = std::max(largest, p.density - curves[j].base_density);
+            out.max_log_factor[k] += stock.inhibition[k][j] * largest;
+        }
         auto plane      = std::make_shared<FramePlane>();
         plane->width    = frame_width;
         plane->height   = frame_height;

@@ -60,6 +60,11 @@ struct InhibitionPlan {
     /// Bound on |log_factor - the model's|: sum_j inhibition[k][j] times the
     /// expected curves' density error, largest over k.
     double error = 0.0;
+    /// Per layer, an upper bound on its log factor anywhere, from the stock
+    /// and scene alone: sum_j inhibition[k][j] times the largest density
+    /// above base of layer j's curve (a blur cannot exceed it). 0 for a
+    /// layer without inhibition.
+    std::vector<double> max_log_factor;
 };
 Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,

@@ -187,7 +187,9 @@ TEST(Inhibition, BitIdenticalForThreadsTilesAndRois)
         expect_deterministic(s, engine, Roi { 194, 10, 207, 30 });
 }
 
-TEST(Inhibition, AUniformPatchHasTheInhibitedExpectedCurve)
+class InhibitedPatch : public ::testing::TestWithParam<ScaleMethod> {};
+
+TEST_P(InhibitedPatch, HasTheInhibitedExpectedCurve)
 {
     // Far from the frame's edges (where the blurred density falls off) a
     // uniform patch's mean transmittance is the expected curve with
@@ -195,10 +197,19 @@ TEST(Inhibition, AUniformPatchHasTheInhibitedExpectedCurve)
     // (pixels in blocks of 4x4 as the unit; 100 um from the frame's edges,
     // 5 diffusion widths) plus the curve's error bound;
     // and clearly below the curve without.
+    // Grain by grain, and at pixel scale (its statistics thinned by the
+    // log factor at each pixel: the mean is exact there too).
     TestScene s = edge_scene(1.0, 20.0, kHeight);
     for (float& v : s.pixels)
         v = 0.18f;
-    const auto d = render_scene(s, RenderSettings {});
+    RenderSettings settings;
+    settings.scale = GetParam();
+    RenderStats stats;
+    const auto d = render_scene(s, settings, &stats);
+    EXPECT_NE(stats.layers[0].path.find(GetParam() == ScaleMethod::pixel ? "scale=pixel"
+                                                                         : "kinetics="),
+              std::string::npos)
+        << stats.layers[0].path;
     std::vector<double> blocks;
     for (int64_t by = 16; by < kHeight - 16; by += 4)
         for (int64_t bx = 16; bx < kWidth - 16; bx += 4) {
@@ -221,6 +232,16 @@ TEST(Inhibition, AUniformPatchHasTheInhibitedExpectedCurve)
     EXPECT_LT(std::fabs(mean - t_with), 4.0 * se + t_error)
         << "measured " << mean << " expected " << t_with << " se " << se;
     EXPECT_GT(mean - without[0].transmittance_at(0.18), 10.0 * se);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, InhibitedPatch,
+                         ::testing::Values(ScaleMethod::grain, ScaleMethod::pixel),
+                         [](const auto& info) { return std::string(scale_method_name(info.param)); });
+
+TEST(Inhibition, PixelScaleIsBitIdenticalForThreadsTilesAndRois)
+{
+    const TestScene s = edge_scene(1.0, 40.0, 32);
+    expect_deterministic(s, Engine::automatic, Roi { 194, 10, 207, 30 }, ScaleMethod::pixel);
 }
 
 }  // namespace

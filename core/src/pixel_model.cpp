@@ -98,7 +98,8 @@ public:
                     sz.overlap_um2.push_back(image.overlap_um2(sz.r_um[k], (j + 0.5) * m_dh_um));
     }
 
-    PixelModel::Moments operator()(double v) const
+    /// Moments at exposure value v, every P times `factor` (MODEL.md 10).
+    PixelModel::Moments operator()(double v, double factor = 1.0) const
     {
         PixelModel::Moments m;
         std::vector<double> g(kDistanceNodes, 0.0);
@@ -109,7 +110,8 @@ public:
             const double n            = pp.population->grains_per_um2;
             for (size_t k = 0; k < sz.r_um.size(); ++k) {
                 const double a_um2 = M_PI * sz.r_um[k] * sz.r_um[k];
-                const double pd = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
+                const double pd
+                    = factor * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
                 const double nw = n * sz.w[k] * pd;
                 exponent += nw * m_image.blocking_um2(sz.r_um[k]);
                 developed += nw;
@@ -166,46 +168,75 @@ PixelModel::Moments lerp(const PixelModel::Moments& a, const PixelModel::Moments
 
 PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& populations,
                                         double px_um, double py_um, double v,
-                                        const ImageOverlap& image)
+                                        const ImageOverlap& image, double log_factor)
 {
-    return Integrator(populations, px_um, py_um, image)(v);
+    return Integrator(populations, px_um, py_um, image)(v, std::exp(-log_factor));
 }
 
 PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,
-                       double py_um, const ImageOverlap& image)
+                       double py_um, const ImageOverlap& image, double max_log_factor)
 {
     const Integrator moments(populations, px_um, py_um, image);
     const int n   = (kOctavesBelow + kOctavesAbove) * kPerOctave;
     m_log_v0      = std::log(kGrey) - kOctavesBelow * std::log(2.0);
     const double step = std::log(2.0) / kPerOctave;
     m_inv_step    = 1.0 / step;
-    m_nodes.push_back(moments(0.0));
-    for (int i = 0; i <= n; ++i)
-        m_nodes.push_back(moments(std::exp(m_log_v0 + i * step)));
-    for (int i = 0; i < n; ++i) {
-        const Moments exact  = moments(std::exp(m_log_v0 + (i + 0.5) * step));
-        const Moments interp = lerp(m_nodes[static_cast<size_t>(i) + 1],
-                                    m_nodes[static_cast<size_t>(i) + 2], 0.5);
+    const auto value = [&](double i) { return std::exp(m_log_v0 + i * step); };
+    const int rows = max_log_factor > 0.0
+                         ? static_cast<int>(std::ceil(max_log_factor / kLogFactorStep)) + 1
+                         : 1;
+    const auto factor = [](double l) { return l > 0.0 ? std::exp(-l) : 1.0; };
+    const auto note_error = [&](const Moments& exact, const Moments& interp) {
         if (exact.mean > 0.0)
             m_max_mean_error = std::max(m_max_mean_error,
                                         std::fabs(interp.mean - exact.mean) / exact.mean);
         if (exact.variance > 0.0)
             m_max_sd_error = std::max(m_max_sd_error,
                                       std::fabs(std::sqrt(interp.variance / exact.variance) - 1.0));
+    };
+    for (int r = 0; r < rows; ++r) {
+        const double f = factor(r * kLogFactorStep);
+        std::vector<Moments> nodes;
+        nodes.push_back(moments(0.0, f));
+        for (int i = 0; i <= n; ++i)
+            nodes.push_back(moments(value(i), f));
+        for (int i = 0; i < n; ++i)
+            note_error(moments(value(i + 0.5), f),
+                       lerp(nodes[static_cast<size_t>(i) + 1], nodes[static_cast<size_t>(i) + 2], 0.5));
+        m_rows.push_back(std::move(nodes));
+    }
+    // Between log-factor nodes, at every exposure node.
+    for (int r = 0; r + 1 < rows; ++r) {
+        const double f = factor((r + 0.5) * kLogFactorStep);
+        for (int i = 0; i <= n + 1; ++i)
+            note_error(moments(i == 0 ? 0.0 : value(i - 1), f),
+                       lerp(m_rows[static_cast<size_t>(r)][static_cast<size_t>(i)],
+                            m_rows[static_cast<size_t>(r) + 1][static_cast<size_t>(i)], 0.5));
     }
 }
 
-PixelModel::Moments PixelModel::at(double v) const
+PixelModel::Moments PixelModel::row_at(const std::vector<Moments>& row, double v) const
 {
     if (!(v > 0.0))
-        return m_nodes.front();
+        return row.front();
     const double t = (std::log(v) - m_log_v0) * m_inv_step;
     if (t <= 0.0)
-        return m_nodes[1];
+        return row[1];
     const size_t i = static_cast<size_t>(t);
-    if (i + 2 >= m_nodes.size())
-        return m_nodes.back();
-    return lerp(m_nodes[i + 1], m_nodes[i + 2], t - static_cast<double>(i));
+    if (i + 2 >= row.size())
+        return row.back();
+    return lerp(row[i + 1], row[i + 2], t - static_cast<double>(i));
+}
+
+PixelModel::Moments PixelModel::at(double v, double log_factor) const
+{
+    const double t = log_factor / kLogFactorStep;
+    if (m_rows.size() == 1 || !(t > 0.0))
+        return row_at(m_rows.front(), v);
+    const size_t r = static_cast<size_t>(t);
+    if (r + 1 >= m_rows.size())
+        return row_at(m_rows.back(), v);
+    return lerp(row_at(m_rows[r], v), row_at(m_rows[r + 1], v), t - static_cast<double>(r));
 }
 
 void moving_average_taps(double rho, double taps[3])
@@ -240,7 +271,8 @@ double skewed_draw(double mean, double variance, double z)
 }
 
 void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x0, int64_t y0,
-                                int64_t x1, int64_t y1, const double* v, double* transmittance)
+                                int64_t x1, int64_t y1, const double* v,
+                                const double* log_factor, double* transmittance)
 {
     const int64_t tw = x1 - x0, th = y1 - y0;
     // Standard normals of the block and a one-pixel margin, each keyed by
@@ -257,7 +289,7 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
     for (int64_t j = 0; j < th; ++j)
         for (int64_t i = 0; i < tw; ++i) {
             const size_t o = static_cast<size_t>(j * tw + i);
-            const PixelModel::Moments m = model.at(v[o]);
+            const PixelModel::Moments m = model.at(v[o], log_factor ? log_factor[o] : 0.0);
             double kx[3], ky[3];
             moving_average_taps(m.rho_x, kx);
             moving_average_taps(m.rho_y, ky);

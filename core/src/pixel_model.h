@@ -88,25 +88,39 @@ public:
     /// b and k its blocking area and overlap, mu = exp(-sum n E[P b]) and
     /// C(h) = mu^2 (exp(sum n E[P k(h)]) - 1) (for silver, the disc area and
     /// the lens K above).
+    /// `max_log_factor` > 0: the layer is inhibited (MODEL.md 10: every P
+    /// times exp(-log_factor)), and the table gains a second axis, the log
+    /// factor, from 0 to max_log_factor in steps of kLogFactorStep.
     PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um,
-               const ImageOverlap& image = ImageOverlap());
+               const ImageOverlap& image = ImageOverlap(), double max_log_factor = 0.0);
+
+    /// Step of the log-factor axis: the thinning exp(-L) is interpolated
+    /// linearly between nodes 0.05 apart (relative error <= 3e-4, measured
+    /// with the rest in max_mean_error and max_sd_error).
+    static constexpr double kLogFactorStep = 0.05;
 
     /// Moments at exposure value v (linear interpolation in log v; v beyond
-    /// the table: its last node).
-    Moments at(double v) const;
+    /// the table: its last node) and log factor L (linear in L, clamped to
+    /// the table's range; 0 for a layer without inhibition).
+    Moments at(double v, double log_factor = 0.0) const;
 
     /// Moments computed directly (no table): for tests and the table.
     static Moments compute(const std::vector<PixelPopulation>& populations, double px_um,
-                           double py_um, double v, const ImageOverlap& image = ImageOverlap());
+                           double py_um, double v, const ImageOverlap& image = ImageOverlap(),
+                           double log_factor = 0.0);
 
     /// Largest relative error of the table's interpolation found at node
-    /// midpoints, in the mean and in the standard deviation.
+    /// midpoints (in v, and in L at every v node), in the mean and in the
+    /// standard deviation.
     double max_mean_error() const { return m_max_mean_error; }
     double max_sd_error() const { return m_max_sd_error; }
 
 private:
+    Moments row_at(const std::vector<Moments>& row, double v) const;
+
     double m_log_v0 = 0.0, m_inv_step = 0.0;
-    std::vector<Moments> m_nodes;  ///< node 0: v = 0
+    /// One row of exposure nodes (node 0: v = 0) per log-factor node.
+    std::vector<std::vector<Moments>> m_rows;
     double m_max_mean_error = 0.0, m_max_sd_error = 0.0;
 };
 
@@ -122,9 +136,11 @@ double skewed_draw(double mean, double variance, double z);
 
 /// Writes the transmittance of the pixels [x0, x1) x [y0, y1) of one layer,
 /// row-major into `transmittance`, given each pixel's exposure value in `v`
-/// (same layout). Normals are keyed by (key, absolute pixel), so any tiling
-/// gives the same values.
+/// and (inhibited layers; else null) its log factor in `log_factor` (same
+/// layout). Normals are keyed by (key, absolute pixel), so any tiling gives
+/// the same values.
 void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x0, int64_t y0,
-                                int64_t x1, int64_t y1, const double* v, double* transmittance);
+                                int64_t x1, int64_t y1, const double* v,
+                                const double* log_factor, double* transmittance);
 
 }  // namespace filmgrain

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "dye.h"
 #include "grain_kernel.h"
 #include "image_formation.h"
 #include "test_tables.h"
@@ -22,8 +23,10 @@ struct Sample {
 };
 
 /// Pixel transmittances of several 48x48 blocks of 4 um pixels, grain by
-/// grain.
-Sample monte_carlo(const PixelPopulation& pp, double v)
+/// grain: exact coverage of silver discs, or (`dye`) the dye image of
+/// MODEL.md 8 at 32 samples per pixel and axis.
+Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullptr,
+                   double factor = 1.0)
 {
     constexpr int kBlocks = 12, kN = 48;
     constexpr double kPitch = 4.0;
@@ -35,18 +38,30 @@ Sample monte_carlo(const PixelPopulation& pp, double v)
         const PopulationGrains grains(*pp.population, 100 + b, 0, 0);
         const FastGrains fast(grains);
         const RectUm rect { 0.0, 0.0, kN * kPitch, kN * kPitch };
+        // Grains whose image may reach the block (clouds: to their reach).
+        const double margin = dye ? image_reach_factor(*dye) * grains.radius_at_z_um(9.0) : 0.0;
+        const RectUm near { -margin, -margin, kN * kPitch + margin, kN * kPitch + margin };
         std::vector<Disc> discs;
-        fast.for_each_grain_near(rect, [&](double x, double y, double r, uint32_t bits, uint64_t) {
-            const Disc d { x, y, r };
+        fast.for_each_grain_near(near, [&](double x, double y, double r, uint32_t bits, uint64_t) {
+            const Disc d { x, y, dye ? r * image_reach_factor(*dye) : r };
             if (!disc_touches_rect(d, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                 return;
             const double u = (bits + 0.5) * 0x1.0p-32;
-            if (u >= 1.0 - pixel_develop_probability(pp, pp.photons_per_value_um2 * v * M_PI * r * r))
-                discs.push_back(d);
+            if (u >= 1.0 - factor * pixel_develop_probability(
+                               pp, pp.photons_per_value_um2 * v * M_PI * r * r))
+                discs.push_back({ x, y, r });
         });
         std::vector<double> f(kN * kN);
-        GridCoverageScratch scratch;
-        grid_coverage(discs, 0, 0, kN, kN, kPitch, kPitch, scratch, f.data());
+        if (dye) {
+            DyeScratch scratch;
+            dye_transmittance(discs, *dye, 20.0, 0, 0, kN, kN, kPitch, kPitch, 32, scratch,
+                              f.data());
+            for (double& c : f)
+                c = 1.0 - c;  // as a covered fraction, like grid_coverage's
+        } else {
+            GridCoverageScratch scratch;
+            grid_coverage(discs, 0, 0, kN, kN, kPitch, kPitch, scratch, f.data());
+        }
         double m = 0.0;
         for (double c : f) {
             t_all.push_back(1.0 - c);
@@ -105,6 +120,76 @@ TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
     }
 }
 
+// The same for dye clouds (MODEL.md 8): the pixel statistics take each
+// grain's blocking area and overlap from ImageOverlap (disc and gaussian
+// clouds larger and smaller than the grain), against dye images rendered
+// grain by grain at 32 samples per pixel and axis (the sampling's own
+// per-pixel noise, measured in Dye.SamplingConverges, is far below the
+// grain noise here).
+TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
+{
+    const DevelopTable table = small_develop_table();
+    const DevelopCurve curve(table);
+    Population pop;
+    pop.grains_per_um2     = 1.5;
+    pop.diameter_um        = 0.8;
+    pop.diameter_log_sigma = 0.3;
+    const double k = 40.0;
+    const PopulationGrains grains(pop, 1, 0, 0);
+    const std::vector<PixelPopulation> pops { { &pop, &grains, k, &curve, &table } };
+    for (const CloudProfile profile : { CloudProfile::disc, CloudProfile::gaussian }) {
+        Layer layer;
+        layer.image                = LayerImage::dye;
+        layer.cloud_profile        = profile;
+        layer.cloud_diameter_ratio = profile == CloudProfile::disc ? 1.5 : 0.9;
+        layer.cloud_density        = 0.7;
+        const ImageOverlap image(layer);
+        for (double v : { 0.4, 1.0 }) {
+            const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, image);
+            const Sample s = monte_carlo(pops[0], v, &layer);
+            const std::string what = std::string(cloud_profile_name(profile)) + " v "
+                                     + std::to_string(v);
+            EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << what;
+            EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << what;
+            EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << what;
+            // Not the silver statistics of the same grains (the clouds
+            // block 1.8 and 0.66 times a disc's light).
+            const PixelModel::Moments silver = PixelModel::compute(pops, 4.0, 4.0, v);
+            EXPECT_GT(std::fabs(silver.mean - m.mean), 5 * s.se_mean) << what;
+        }
+    }
+}
+
+// MODEL.md 10 at pixel scale: an inhibited layer's moments are those of
+// every P thinned by exp(-L), against grains developed with the thinned P;
+// the table's second axis interpolates them.
+TEST(PixelModel, InhibitedMomentsAreThinnedOnes)
+{
+    const DevelopTable table = small_develop_table();
+    const DevelopCurve curve(table);
+    Population pop;
+    pop.grains_per_um2     = 1.5;
+    pop.diameter_um        = 0.8;
+    pop.diameter_log_sigma = 0.3;
+    const PopulationGrains grains(pop, 1, 0, 0);
+    const std::vector<PixelPopulation> pops { { &pop, &grains, 40.0, &curve, &table } };
+    const PixelModel table_model(pops, 4.0, 4.0, ImageOverlap(), 1.0);
+    for (double l : { 0.3, 0.77 }) {
+        const double v              = 1.0;
+        const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, ImageOverlap(), l);
+        const Sample s              = monte_carlo(pops[0], v, nullptr, std::exp(-l));
+        EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << "L " << l;
+        EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << "L " << l;
+        EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << "L " << l;
+        // Between log-factor nodes (0.05 apart) and exposure nodes.
+        EXPECT_NEAR(table_model.at(v, l).mean, m.mean, 1e-3 * m.mean) << "L " << l;
+        EXPECT_NEAR(table_model.at(v, l).variance, m.variance, 2e-3 * m.variance) << "L " << l;
+        // Thinner than the uninhibited layer, beyond the noise.
+        EXPECT_GT(m.mean - PixelModel::compute(pops, 4.0, 4.0, v).mean, 5 * s.se_mean);
+    }
+    EXPECT_LT(table_model.max_mean_error(), 1e-3);
+}
+
 TEST(PixelModel, MovingAverageTapsHaveTheirCorrelation)
 {
     for (double rho : { 0.0, 0.05, 0.2, 0.5 }) {
@@ -127,12 +212,12 @@ TEST(PixelModel, SamplesAreTileIndependent)
     std::vector<double> v(32 * 32), whole(32 * 32), part(16 * 16);
     for (size_t i = 0; i < v.size(); ++i)
         v[i] = 0.01 * static_cast<double>(i % 97);
-    sample_pixel_transmittance(model, 7, 0, 0, 32, 32, v.data(), whole.data());
+    sample_pixel_transmittance(model, 7, 0, 0, 32, 32, v.data(), nullptr, whole.data());
     std::vector<double> vp(16 * 16);
     for (int y = 0; y < 16; ++y)
         for (int x = 0; x < 16; ++x)
             vp[y * 16 + x] = v[(y + 16) * 32 + x + 16];
-    sample_pixel_transmittance(model, 7, 16, 16, 32, 32, vp.data(), part.data());
+    sample_pixel_transmittance(model, 7, 16, 16, 32, 32, vp.data(), nullptr, part.data());
     for (int y = 0; y < 16; ++y)
         for (int x = 0; x < 16; ++x)
             EXPECT_EQ(part[y * 16 + x], whole[(y + 16) * 32 + x + 16]);

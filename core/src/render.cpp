@@ -207,6 +207,7 @@ struct TileScratch {
     DyeScratch dye;
     ExposurePlane plane;
     std::vector<double> values;
+    std::vector<double> log_factor;  ///< per pixel, pixel scale of an inhibited layer
     /// Grains visited, for the stop check (poll_stop).
     uint32_t grains_seen = 0;
 };
@@ -531,8 +532,22 @@ private:
                 scratch.values[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
                     = plan.exposure.mean_over_rect(r.x0_um, r.y0_um, r.x1_um, r.y1_um);
             }
+        // MODEL.md 10: the inhibitors' log factor at each pixel's centre
+        // (it is constant over each input pixel; a scan pixel that spans
+        // several takes its centre's).
+        const double* log_factor = nullptr;
+        if (plan.inhibition) {
+            scratch.log_factor.resize(static_cast<size_t>(tw * th));
+            for (int64_t iy = y0; iy < y1; ++iy)
+                for (int64_t ix = x0; ix < x1; ++ix) {
+                    const RectUm r = m_frame.scan_rect(ix, iy, ix + 1, iy + 1);
+                    scratch.log_factor[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
+                        = plan.inhibition->at(0.5 * (r.x0_um + r.x1_um), 0.5 * (r.y0_um + r.y1_um));
+                }
+            log_factor = scratch.log_factor.data();
+        }
         sample_pixel_transmittance(*plan.pixel_model, plan.pixel_key, x0, y0, x1, y1,
-                                   scratch.values.data(), scratch.fraction.data());
+                                   scratch.values.data(), log_factor, scratch.fraction.data());
         for (int64_t iy = y0; iy < y1; ++iy)
             for (int64_t ix = x0; ix < x1; ++ix)
                 store_density(layer, ix, iy,

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <utility>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -43,11 +44,13 @@ inline bool bit_identical(const std::vector<float>& a, const std::vector<float>&
 /// The determinism guarantee for `engine`: 1 thread with 64-pixel tiles and
 /// 2 threads with 7-pixel tiles give the same bits, and a render of `roi`
 /// (2 threads, 7-pixel tiles) is a crop of the full one. The scan is the
-/// input's size.
-inline void expect_deterministic(const TestScene& s, Engine engine, const Roi& roi)
+/// input's size. `scale`: the scale setting (unset: the engine's choice).
+inline void expect_deterministic(const TestScene& s, Engine engine, const Roi& roi,
+                                 std::optional<ScaleMethod> scale = {})
 {
     RenderSettings one;
     one.engine       = engine;
+    one.scale        = scale;
     one.nthreads     = 1;
     one.tile_size_px = 64;
     RenderSettings two = one;
