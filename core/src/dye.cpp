@@ -190,8 +190,14 @@ ImageOverlap::ImageOverlap(const Layer& layer)
     if (m_image == LayerImage::dye) {
         const double block = -std::expm1(-layer.cloud_density * kLn10);
         m_disc_factor      = block * block;
-        if (m_profile == CloudProfile::gaussian)
+        if (m_profile == CloudProfile::gaussian) {
             m_gaussian = shared_gaussian_overlap(layer.cloud_density);
+            const std::vector<double>& k = *m_gaussian;
+            size_t i = k.size() - 1;  // the first node from which k stays below 1e-3 k(0)
+            while (i > 0 && k[i - 1] < 1e-3 * k[0])
+                --i;
+            m_gaussian_correlation = static_cast<double>(i) / kGaussianOverlapSteps;
+        }
     }
 }
 
@@ -214,6 +220,13 @@ double ImageOverlap::overlap_um2(double r_um, double h_um) const
         return 0.0;
     const double f = x - static_cast<double>(i);
     return rc * rc * (k[i] * (1.0 - f) + k[i + 1] * f);
+}
+
+double ImageOverlap::correlation_range_um(double r_um) const
+{
+    if (m_image == LayerImage::dye && m_profile == CloudProfile::gaussian)
+        return m_gaussian_correlation * m_ratio * r_um;
+    return overlap_range_um(r_um);
 }
 
 double ImageOverlap::overlap_range_um(double r_um) const

@@ -63,6 +63,12 @@ public:
     double overlap_um2(double r_um, double h_um) const;
     /// The distance from which k(r, h) is 0: twice the image's reach.
     double overlap_range_um(double r_um) const;
+    /// The distance beyond which k(r, h) stays below 1e-3 of k(r, 0): what
+    /// the pixel scale's neighbour correlations must cover. Silver and disc
+    /// clouds: overlap_range_um (k reaches 0 there); gaussian clouds 2.6
+    /// cloud radii when faint (k falls like exp(-(h / R)^2)) to 3.2 at
+    /// density 5, well inside their 6-radius overlap range.
+    double correlation_range_um(double r_um) const;
 
 private:
     LayerImage m_image     = LayerImage::silver;
@@ -72,6 +78,8 @@ private:
     double m_disc_factor   = 1.0;  ///< (1 - 10^-c)^2 for disc clouds
     /// Gaussian clouds: k at h = i R / kGaussianOverlapSteps, over R^2.
     std::shared_ptr<const std::vector<double>> m_gaussian;
+    /// Gaussian clouds: correlation_range_um over the cloud radius.
+    double m_gaussian_correlation = 0.0;
 };
 
 /// Scratch space for dye_transmittance, reused between calls.

@@ -69,6 +69,7 @@ TEST(Dye, ImageOverlapAgainstIntegrals)
     EXPECT_DOUBLE_EQ(silver.blocking_um2(1.5), M_PI * 2.25);
     EXPECT_DOUBLE_EQ(silver.overlap_um2(1.5, 0.7), lens_area_um2(1.5, 0.7));
     EXPECT_EQ(silver.overlap_range_um(1.5), 3.0);
+    EXPECT_EQ(silver.correlation_range_um(1.5), 3.0);
     for (const CloudProfile profile : { CloudProfile::disc, CloudProfile::gaussian })
         for (const double density : { 0.3, 1.0, 5.0 }) {
             Layer layer;
@@ -94,6 +95,18 @@ TEST(Dye, ImageOverlapAgainstIntegrals)
                             1e-12 * k0) << what;
             }
             EXPECT_EQ(image.overlap_um2(1.0, image.overlap_range_um(1.0)), 0.0) << what;
+            // Where the neighbour correlations end (the pixel scale's rule):
+            // k below 1e-3 k(0) from there on, above it a table step (rc /
+            // 32) before; for disc clouds the overlap range itself.
+            const double cr = image.correlation_range_um(1.0);
+            if (profile == CloudProfile::disc) {
+                EXPECT_EQ(cr, image.overlap_range_um(1.0)) << what;
+            } else {
+                for (double h = cr; h < image.overlap_range_um(1.0); h += 0.01)
+                    EXPECT_LE(image.overlap_um2(1.0, h), 1e-3 * k0) << what << " h " << h;
+                EXPECT_GT(image.overlap_um2(1.0, cr - 1.01 * 1.6 / 32), 1e-3 * k0) << what;
+                EXPECT_LT(cr, 0.6 * image.overlap_range_um(1.0)) << what;
+            }
             // integral over the plane of k(h) d^2h = b^2.
             const double range = image.overlap_range_um(1.0);
             const int n        = 20000;

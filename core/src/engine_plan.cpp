@@ -658,12 +658,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                                   "kinetics=chain|early|table, grains=exact and populations with "
                                   "rate_area_exponent != 0 do not have: use scale=grain");
         // Each developed grain's image (MODEL.md 5 or 8): its blocking area
-        // and overlap enter the statistics; the image (a silver disc, a dye
-        // cloud to its reach) must fit in a pixel.
+        // and overlap enter the statistics; the neighbour correlations it
+        // makes (a silver disc's diameter, a gaussian cloud's overlap to
+        // 1e-3 of its peak) must stay within a pixel.
         const ImageOverlap image(layer);
         double largest_um = 0.0;
         for (const PopulationPlan& pp : plan.populations)
-            largest_um = std::max(largest_um, image.overlap_range_um(pp.grains.radius_at_z_um(4.0)));
+            largest_um = std::max(largest_um,
+                                  image.correlation_range_um(pp.grains.radius_at_z_um(4.0)));
         const double pitch_um = std::min(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
         if (!settings.scale && largest_um > pitch_um)
             continue;

@@ -41,9 +41,13 @@ double unmeasurable(const Stock& stock, const sm::Datasheet& sheet, DevelopModel
 constexpr double kLo[4] = { std::log10(0.5), std::log10(0.2), 0.05, -2.0 };
 constexpr double kHi[4] = { std::log10(15.0), std::log10(3.0), 0.8, 0.0 };
 /// Bounds of a dye layer's cloud search (MODEL.md 8): log10
-/// cloud_diameter_ratio, log10 cloud_density.
+/// cloud_diameter_ratio, log10 cloud_density. Clouds at most twice their
+/// grain's diameter: larger ones lower the granularity further (a VISION3
+/// fit ran to 3, the previous bound), but spread each grain's image over
+/// neighbouring pixels of a 4K scan, where the pixel scale no longer
+/// applies (an hours-long grain-by-grain render).
 constexpr double kCloudLo[2] = { std::log10(0.5), std::log10(0.05) };
-constexpr double kCloudHi[2] = { std::log10(3.0), std::log10(5.0) };
+constexpr double kCloudHi[2] = { std::log10(2.0), std::log10(5.0) };
 /// Upper bound of a layer's self-inhibition (MODEL.md 10). On a uniform
 /// patch the density is D e^(-a D) for the uninhibited D, at most 1 / (a e):
 /// a = 1 keeps net densities up to 0.37 reachable, and higher a none that
@@ -91,24 +95,31 @@ double target_speed_log10_h(const sm::Datasheet& sheet)
                                               : std::log10(0.8 / s);
 }
 
+/// What a speed or slope miss beyond 0.9 of its tolerance adds, per
+/// squared tolerance unit: the curve's figures are within the grains'
+/// reach and are held to their tolerance first, so that a granularity the
+/// model cannot follow (model_limits) is not traded for them.
+constexpr double kCurveMissWeight = 100.0;
+
 /// Squared misses of one layer's figures in tolerance units (D-min aside:
-/// the base absorbs it; only fog above the target D-min counts).
+/// the base absorbs it; only fog above the target D-min counts), speed and
+/// slope near and beyond their tolerance weighted up (kCurveMissWeight).
 double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::DatasheetFigures& f,
                        double base_density)
 {
     const sm::LayerTargets& t         = sheet.layers[i];
     const sm::DatasheetFigures::Layer& l = f.layers[i];
     const sm::Tolerances tol;
+    const auto curve_miss = [](double r) {
+        const double over = std::max(0.0, std::fabs(r) - 0.9);
+        return r * r + kCurveMissWeight * over * over;
+    };
     double j = 0.0;
-    if (sheet.speed) {
-        const double r = kStopsPerDecade * (l.speed_log10_h.value - target_speed_log10_h(sheet))
-                         / tol.speed_stops;
-        j += r * r;
-    }
-    if (t.slope) {
-        const double r = (l.slope.value - *t.slope) / tol.slope;
-        j += r * r;
-    }
+    if (sheet.speed)
+        j += curve_miss(kStopsPerDecade * (l.speed_log10_h.value - target_speed_log10_h(sheet))
+                        / tol.speed_stops);
+    if (t.slope)
+        j += curve_miss((l.slope.value - *t.slope) / tol.slope);
     for (size_t g = 0; g < t.granularity.size(); ++g) {
         const double r = (l.granularity[g].value / t.granularity[g].rms - 1.0) / tol.granularity_rel;
         j += r * r;
