@@ -99,7 +99,7 @@ double target_speed_log10_h(const sm::Datasheet& sheet)
 /// squared tolerance unit: the curve's figures are within the grains'
 /// reach and are held to their tolerance first, so that a granularity the
 /// model cannot follow (model_limits) is not traded for them.
-constexpr double kCurveMissWeight = 100.0;
+constexpr double kCurveMissWeight = 10.0;
 
 /// Squared misses of one layer's figures in tolerance units (D-min aside:
 /// the base absorbs it; only fog above the target D-min counts), speed and

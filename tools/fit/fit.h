@@ -19,7 +19,7 @@
 // Each objective is the sum of squared misses in units of the issue's
 // tolerance (speed 1/3 stop, slope 0.05, granularity 10%, reciprocity 1/3
 // stop, 1/6 inside none_between), so 1 is "at tolerance" for one figure;
-// speed and slope misses beyond 0.9 of their tolerance cost 100 times more
+// speed and slope misses beyond 0.9 of their tolerance cost 10 times more
 // (held first: a granularity the model cannot follow is not traded for them).
 // The result is measured again at the expected curve's full precision.
 #pragma once
