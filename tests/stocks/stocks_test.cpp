@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "fit.h"
 
@@ -34,8 +35,13 @@ void expect_all_met(const std::vector<sm::Comparison>& comparisons, const std::s
                              << c.tolerance;
 }
 
+/// Measures a built-in stock against its datasheet: every figure within
+/// the tolerance, except exactly those named in `missed` (figures
+/// the model cannot reach, fit::model_limits, or that its fit did not: each
+/// stated in docs/stocks and the README), which must still miss, so that
+/// the list stays what the documents say.
 void check_builtin(const std::string& preset, const std::string& sheet_file,
-                   size_t expected_figures)
+                   size_t expected_figures, const std::set<std::string>& missed = {})
 {
     Stock stock;
     ASSERT_TRUE(load_stock(preset, stock));
@@ -49,7 +55,15 @@ void check_builtin(const std::string& preset, const std::string& sheet_file,
     // Every target the datasheet gives is measured.
     EXPECT_EQ(comparisons.size(), expected_figures);
     std::cout << fit::comparison_table(comparisons);
-    expect_all_met(comparisons, preset);
+    std::vector<sm::Comparison> held;
+    for (const sm::Comparison& c : comparisons) {
+        if (missed.count(c.figure))
+            EXPECT_FALSE(c.met()) << preset << ": " << c.figure
+                                  << " now meets its target: update the list and the documents";
+        else
+            held.push_back(c);
+    }
+    expect_all_met(held, preset);
 }
 
 TEST(BuiltInStocks, TriX400MeetsItsDatasheet)
@@ -63,6 +77,28 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 {
     // As Tri-X, plus reciprocity at 1e-4 s.
     check_builtin("t-max-100", "kodak-t-max-100.json", 10);
+}
+
+// The colour stocks (dye clouds, self-inhibition) meet every figure but
+// the granularities named here (and 250D's G slope, 0.0503 against 0.05):
+// their granularity cannot fall with density as VISION3's does
+// (fit::model_limits) and the fit's compromise misses these; the README and
+// docs/stocks say so.
+TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedGranularities)
+{
+    // speed, per layer D-min, slope, RMS at net 0.5 / 1 / 1.5, reciprocity
+    // at 1e-3, 0.1 and 1 s.
+    check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 19,
+                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5", "G RMS at net 1",
+                    "B RMS at net 0.5" });
+}
+
+TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
+{
+    check_builtin("vision3-250d", "kodak-vision3-250d-5207.json", 19,
+                  { "G slope [-2.02, -1.01]", "R RMS at net 0.5", "R RMS at net 1.5",
+                    "G RMS at net 0.5", "G RMS at net 1", "G RMS at net 1.5", "B RMS at net 0.5",
+                    "B RMS at net 1.5" });
 }
 
 TEST(Fitter, RecoversAPerturbedSyntheticTarget)

@@ -217,9 +217,10 @@ public:
         std::vector<double> x0(n), lo(n), hi(n);
         for (size_t p = 0; p < np; ++p) {
             get_population(m_stock.layers[l].populations[p], &x0[4 * p]);
+            x0[4 * p + 2] = std::min(x0[4 * p + 2], m_options.max_log_sigma);
             for (int k = 0; k < 4; ++k) {
                 lo[4 * p + k] = kLo[k];
-                hi[4 * p + k] = kHi[k];
+                hi[4 * p + k] = k == 2 ? m_options.max_log_sigma : kHi[k];
             }
         }
         if (dye) {
@@ -519,6 +520,9 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
         return Status::errorf("rounds = ", options.rounds, ": must be in [1, 8]");
     if (options.population_evals < 1 || options.rate_evals < 1)
         return Status::errorf("evaluation budgets must be >= 1");
+    if (!(options.max_log_sigma >= kLo[2] && options.max_log_sigma <= kHi[2]))
+        return Status::errorf("max_log_sigma = ", options.max_log_sigma, ": must be in [", kLo[2],
+                              ", ", kHi[2], "]");
     Stock stock;
     if (options.start) {
         stock = *options.start;

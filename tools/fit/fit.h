@@ -44,6 +44,11 @@ struct FitOptions {
     uint64_t seed = 1;
     /// Grain populations per layer. [1, 4].
     int populations = 2;
+    /// Largest diameter_log_sigma the search may give a population, [0.05,
+    /// 0.8]. Broad sizes put the granularity in a few large grains; below
+    /// 0.5 every grain to z = 4 of a fine emulsion stays under a 4K pixel,
+    /// so the pixel scale renders the stock (the VISION3 fits use 0.5).
+    double max_log_sigma = 0.8;
     /// Starts of the population search per layer and round. [1, 16].
     int starts = 2;
     /// Objective evaluations per start of the population search.

@@ -59,6 +59,10 @@ void usage(std::ostream& os)
           "  --cloud-profile disc|gaussian  dye clouds' profile (default "
        << filmgrain::cloud_profile_name(d.cloud_profile)
        << ")\n"
+          "  --max-log-sigma X  largest diameter_log_sigma of a population, 0.05 to 0.8\n"
+          "                     (default "
+       << d.max_log_sigma
+       << "; 0.5 keeps a fine stock at pixel scale in a 4K scan)\n"
           "  --inhibition, --no-inhibition  search each layer's self-inhibition (MODEL.md\n"
           "                     10, diffusion "
        << d.inhibitor_diffusion_um
@@ -219,6 +223,14 @@ int main(int argc, char** argv)
             }
             opt.cloud_profile = v == "disc" ? filmgrain::CloudProfile::disc
                                             : filmgrain::CloudProfile::gaussian;
+        } else if (a == "--max-log-sigma") {
+            const std::string v = next("a number");
+            char* end           = nullptr;
+            opt.max_log_sigma   = std::strtod(v.c_str(), &end);
+            if (end == v.c_str() || *end || !(opt.max_log_sigma >= 0.05 && opt.max_log_sigma <= 0.8)) {
+                std::cerr << "filmgrain-fit: --max-log-sigma " << v << ": must be a number in [0.05, 0.8]\n";
+                return 2;
+            }
         } else if (a == "--inhibition") {
             opt.inhibition = true;
         } else if (a == "--no-inhibition") {
