@@ -6,6 +6,7 @@
 #include "pixel_model.h"
 
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -96,23 +97,39 @@ Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullp
     return s;
 }
 
+/// The test layer of the tests below: one population of 0.8 um grains at
+/// 1.5 per um^2, about 20 photons per mean grain at v = 1, the small
+/// development table.
+struct TestLayer {
+    DevelopTable table = small_develop_table();
+    DevelopCurve curve { table };
+    Population pop = [] {
+        Population p;
+        p.grains_per_um2     = 1.5;
+        p.diameter_um        = 0.8;
+        p.diameter_log_sigma = 0.3;
+        return p;
+    }();
+    PopulationGrains grains { pop, 1, 0, 0 };
+    std::vector<PixelPopulation> pops { { &pop, &grains, 40.0, &curve, &table } };
+};
+
+/// The model's mean, variance and neighbour correlation against a Monte
+/// Carlo sample, within 5 of its standard errors.
+void expect_moments(const Sample& s, const PixelModel::Moments& m, const std::string& what)
+{
+    EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << what;
+    EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << what;
+    EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << what;
+}
+
 TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
 {
-    const DevelopTable table = small_develop_table();
-    const DevelopCurve curve(table);
-    Population pop;
-    pop.grains_per_um2     = 1.5;
-    pop.diameter_um        = 0.8;
-    pop.diameter_log_sigma = 0.3;
-    const double k = 40.0;  // photons per value um^2: ~20 per mean grain at v = 1
-    const PopulationGrains grains(pop, 1, 0, 0);
-    const std::vector<PixelPopulation> pops { { &pop, &grains, k, &curve, &table } };
+    const TestLayer t;
+    const std::vector<PixelPopulation>& pops = t.pops;
     for (double v : { 0.05, 0.4, 1.0 }) {
         const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v);
-        const Sample s = monte_carlo(pops[0], v);
-        EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << "v " << v;
-        EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << "v " << v;
-        EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << "v " << v;
+        expect_moments(monte_carlo(pops[0], v), m, "v " + std::to_string(v));
         EXPECT_LT(m.rho_x, 0.3);  // the n / 2 effective pixels above
         // The table interpolates the direct computation closely.
         const PixelModel table_model(pops, 4.0, 4.0);
@@ -128,15 +145,8 @@ TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
 // grain noise here).
 TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
 {
-    const DevelopTable table = small_develop_table();
-    const DevelopCurve curve(table);
-    Population pop;
-    pop.grains_per_um2     = 1.5;
-    pop.diameter_um        = 0.8;
-    pop.diameter_log_sigma = 0.3;
-    const double k = 40.0;
-    const PopulationGrains grains(pop, 1, 0, 0);
-    const std::vector<PixelPopulation> pops { { &pop, &grains, k, &curve, &table } };
+    const TestLayer t;
+    const std::vector<PixelPopulation>& pops = t.pops;
     for (const CloudProfile profile : { CloudProfile::disc, CloudProfile::gaussian }) {
         Layer layer;
         layer.image                = LayerImage::dye;
@@ -149,9 +159,7 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
             const Sample s = monte_carlo(pops[0], v, &layer);
             const std::string what = std::string(cloud_profile_name(profile)) + " v "
                                      + std::to_string(v);
-            EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << what;
-            EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << what;
-            EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << what;
+            expect_moments(s, m, what);
             // Not the silver statistics of the same grains (the clouds
             // block 1.8 and 0.66 times a disc's light).
             const PixelModel::Moments silver = PixelModel::compute(pops, 4.0, 4.0, v);
@@ -165,22 +173,14 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
 // the table's second axis interpolates them.
 TEST(PixelModel, InhibitedMomentsAreThinnedOnes)
 {
-    const DevelopTable table = small_develop_table();
-    const DevelopCurve curve(table);
-    Population pop;
-    pop.grains_per_um2     = 1.5;
-    pop.diameter_um        = 0.8;
-    pop.diameter_log_sigma = 0.3;
-    const PopulationGrains grains(pop, 1, 0, 0);
-    const std::vector<PixelPopulation> pops { { &pop, &grains, 40.0, &curve, &table } };
+    const TestLayer t;
+    const std::vector<PixelPopulation>& pops = t.pops;
     const PixelModel table_model(pops, 4.0, 4.0, ImageOverlap(), 1.0);
     for (double l : { 0.3, 0.77 }) {
         const double v              = 1.0;
         const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, ImageOverlap(), l);
         const Sample s              = monte_carlo(pops[0], v, nullptr, std::exp(-l));
-        EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << "L " << l;
-        EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << "L " << l;
-        EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << "L " << l;
+        expect_moments(s, m, "L " + std::to_string(l));
         // Between log-factor nodes (0.05 apart) and exposure nodes.
         EXPECT_NEAR(table_model.at(v, l).mean, m.mean, 1e-3 * m.mean) << "L " << l;
         EXPECT_NEAR(table_model.at(v, l).variance, m.variance, 2e-3 * m.variance) << "L " << l;

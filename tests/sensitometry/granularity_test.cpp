@@ -76,6 +76,28 @@ double boolean_sigma(const Scan& s, double aperture_um)
            / std::log(10.0);
 }
 
+/// The 48 um reading of a scan against its Boolean model: 0.434 sigma_T / T
+/// measured and predicted, and the statistical error of their difference:
+/// the jackknife over 16 blocks of the scan, plus the prediction's own
+/// Monte Carlo error (P(develop | N) from 3000 runs of the chain for the
+/// main photon counts), bounded by twice the relative error of E[aP] (Var
+/// T_A scales at most as the square of the covered area).
+struct Agreement {
+    GranularityReading reading;
+    double measured = 0.0, predicted = 0.0, sigma = 0.0;
+};
+
+Agreement agreement(const Scan& s)
+{
+    Agreement a;
+    a.reading   = read(s, 48.0);
+    a.predicted = boolean_sigma(s, 48.0);
+    a.measured  = a.reading.relative_sigma_transmittance / std::log(10.0);
+    a.sigma     = std::hypot(a.reading.relative_sigma_transmittance_se / std::log(10.0),
+                             2.0 * s.model_relative_se * a.predicted);
+    return a;
+}
+
 // Selwyn's law on the paper stock at density 1.0 (a 3 mm square, 4 um
 // pixels), apertures of 8, 16 and 32 mean grain diameters (48, 96, 192 um).
 TEST(Granularity, SelwynsLawHoldsFrom8To32GrainDiameters)
@@ -118,17 +140,9 @@ TEST_P(BooleanGranularity, MeasuredSigmaMatchesTheBooleanModel)
 {
     const double net = GetParam();
     const Scan s     = scan("dense", net, 2000.0, 3.0, 60 + static_cast<uint64_t>(net * 10));
-    const GranularityReading g = read(s, 48.0);
+    const auto [g, measured, predicted, sigma] = agreement(s);
     ASSERT_GT(g.positions, 1000);
-    const double predicted = boolean_sigma(s, 48.0);
-    const double measured  = g.relative_sigma_transmittance / std::log(10.0);
-    // Statistical error: the jackknife over 16 blocks of the scan, plus the
-    // prediction's own Monte Carlo error (P(develop | N) from 3000 runs of
-    // the chain for the main photon counts), bounded by twice the relative
-    // error of E[aP] (Var T_A scales at most as the square of the covered
-    // area). 3 sigma.
-    const double sigma = std::hypot(g.relative_sigma_transmittance_se / std::log(10.0),
-                                    2.0 * s.model_relative_se * predicted);
+    // 3 sigma (Agreement says how sigma is made).
     EXPECT_NEAR(measured, predicted, 3.0 * sigma)
         << "D " << s.reading.layers[0].density << ", measured sigma_D " << g.sigma_density
         << " (std of D_A), 0.434 sigma_T/T " << measured;
@@ -171,12 +185,8 @@ TEST_P(DyeGranularity, MeasuredSigmaMatchesTheCloudModel)
                             l.cloud_diameter_ratio = profile == CloudProfile::disc ? 1.3 : 1.8;
                             l.cloud_density        = profile == CloudProfile::disc ? 0.6 : 0.8;
                         });
-    const GranularityReading g = read(s, 48.0);
+    const auto [g, measured, predicted, sigma] = agreement(s);
     ASSERT_GT(g.positions, 1000);
-    const double predicted = boolean_sigma(s, 48.0);
-    const double measured  = g.relative_sigma_transmittance / std::log(10.0);
-    const double sigma = std::hypot(g.relative_sigma_transmittance_se / std::log(10.0),
-                                    2.0 * s.model_relative_se * predicted);
     EXPECT_NEAR(measured, predicted, 3.0 * sigma)
         << cloud_profile_name(profile) << ": D " << s.reading.layers[0].density
         << ", 0.434 sigma_T/T " << measured;
@@ -205,11 +215,7 @@ TEST(DyeGranularity, SelfInhibitionThinsDevelopment)
         stock.inhibition             = { { 0.4 } };
         stock.inhibitor_diffusion_um = 5.0;
     });
-    const GranularityReading g = read(s, 48.0);
-    const double predicted = boolean_sigma(s, 48.0);
-    const double measured  = g.relative_sigma_transmittance / std::log(10.0);
-    const double sigma = std::hypot(g.relative_sigma_transmittance_se / std::log(10.0),
-                                    2.0 * s.model_relative_se * predicted);
+    const auto [g, measured, predicted, sigma] = agreement(s);
     EXPECT_NEAR(measured, predicted, 3.0 * sigma) << "0.434 sigma_T/T " << measured;
     // Density: exp(-0.4) = 0.67 of the uninhibited 1.0, within the same
     // bound as above (the 2% of the exposure search's prediction).
