@@ -121,15 +121,6 @@ double cloud_area_factor(const Layer& layer)
     return r2 * 0.5 * ein(layer.cloud_density * kLn10);
 }
 
-double lens_area_um2(double r_um, double h_um)
-{
-    if (h_um >= 2.0 * r_um)
-        return 0.0;
-    const double h = std::max(0.0, h_um);
-    return 2.0 * r_um * r_um * std::acos(h / (2.0 * r_um))
-           - 0.5 * h * std::sqrt(std::max(0.0, 4.0 * r_um * r_um - h * h));
-}
-
 namespace {
 
 /// Grid steps per cloud radius of the gaussian overlap table.
@@ -196,7 +187,7 @@ ImageOverlap::ImageOverlap(const Layer& layer)
             size_t i = k.size() - 1;  // the first node from which k stays below 1e-3 k(0)
             while (i > 0 && k[i - 1] < 1e-3 * k[0])
                 --i;
-            m_gaussian_correlation = static_cast<double>(i) / kGaussianOverlapSteps;
+            m_gaussian_correlation_radii = static_cast<double>(i) / kGaussianOverlapSteps;
         }
     }
 }
@@ -208,24 +199,24 @@ double ImageOverlap::blocking_um2(double r_um) const
 
 double ImageOverlap::overlap_um2(double r_um, double h_um) const
 {
-    const double rc = m_ratio * r_um;
+    const double rc_um = m_ratio * r_um;
     if (m_image == LayerImage::silver)
         return lens_area_um2(r_um, h_um);
     if (m_profile == CloudProfile::disc)
-        return m_disc_factor * lens_area_um2(rc, h_um);
+        return m_disc_factor * lens_area_um2(rc_um, h_um);
     const std::vector<double>& k = *m_gaussian;
-    const double x = std::fabs(h_um) / rc * kGaussianOverlapSteps;
+    const double x = std::fabs(h_um) / rc_um * kGaussianOverlapSteps;
     const size_t i = static_cast<size_t>(x);
     if (!(x < static_cast<double>(k.size() - 1)))
         return 0.0;
     const double f = x - static_cast<double>(i);
-    return rc * rc * (k[i] * (1.0 - f) + k[i + 1] * f);
+    return rc_um * rc_um * (k[i] * (1.0 - f) + k[i + 1] * f);
 }
 
 double ImageOverlap::correlation_range_um(double r_um) const
 {
     if (m_image == LayerImage::dye && m_profile == CloudProfile::gaussian)
-        return m_gaussian_correlation * m_ratio * r_um;
+        return m_gaussian_correlation_radii * m_ratio * r_um;
     return overlap_range_um(r_um);
 }
 
@@ -233,8 +224,8 @@ double ImageOverlap::overlap_range_um(double r_um) const
 {
     if (m_image == LayerImage::silver)
         return 2.0 * r_um;
-    const double rc = m_ratio * r_um;
-    return m_profile == CloudProfile::disc ? 2.0 * rc : 2.0 * kGaussianCloudReach * rc;
+    const double rc_um = m_ratio * r_um;
+    return m_profile == CloudProfile::disc ? 2.0 * rc_um : 2.0 * kGaussianCloudReach * rc_um;
 }
 
 void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, double max_density,

@@ -32,10 +32,6 @@ double image_reach_factor(const Layer& layer);
 /// (the per-point clamp at max_density is not in this expectation).
 double cloud_area_factor(const Layer& layer);
 
-/// Area shared by two discs of radius r_um whose centres are h_um apart
-/// (the "lens"), square micrometres; 0 from h = 2 r.
-double lens_area_um2(double r_um, double h_um);
-
 /// The second-order statistics of one developed grain's image, for the
 /// Boolean model of a uniformly exposed layer (MODEL.md 5 and 8). With
 /// a_r(x) = 10^-D_1(x) the transmittance of one grain's image (0 inside a
@@ -79,7 +75,7 @@ private:
     /// Gaussian clouds: k at h = i R / kGaussianOverlapSteps, over R^2.
     std::shared_ptr<const std::vector<double>> m_gaussian;
     /// Gaussian clouds: correlation_range_um over the cloud radius.
-    double m_gaussian_correlation = 0.0;
+    double m_gaussian_correlation_radii = 0.0;
 };
 
 /// Scratch space for dye_transmittance, reused between calls.

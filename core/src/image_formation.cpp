@@ -321,6 +321,15 @@ void count_points(const uint64_t* bits, int64_t tw, int64_t th, int64_t samples,
 
 }  // namespace
 
+double lens_area_um2(double r_um, double h_um)
+{
+    if (h_um >= 2.0 * r_um)
+        return 0.0;
+    const double h = std::max(0.0, h_um);
+    return 2.0 * r_um * r_um * std::acos(h / (2.0 * r_um))
+           - 0.5 * h * std::sqrt(std::max(0.0, 4.0 * r_um * r_um - h * h));
+}
+
 void raster_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64_t x1,
                      int64_t y1, double px_um, double py_um, int samples,
                      RasterScratch& scratch, double* fraction)

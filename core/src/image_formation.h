@@ -27,6 +27,10 @@ inline bool disc_touches_rect(const Disc& d, double x0_um, double y0_um, double 
     return dx * dx + dy * dy < d.r_um * d.r_um;
 }
 
+/// Area shared by two discs of radius r_um whose centres are h_um apart
+/// (the "lens"), square micrometres; 0 from h = 2 r.
+double lens_area_um2(double r_um, double h_um);
+
 /// Exact area of the rectangle [x0, x1] x [y0, y1] covered by the union of
 /// the discs, square micrometres. Green's theorem over the boundary of
 /// (union of discs) intersected with the rectangle: the circle arcs that lie

@@ -10,16 +10,6 @@
 
 namespace filmgrain {
 
-namespace {
-
-/// Sum of a layer's sensitivity weights: its exposure value per unit of a
-/// neutral grey (MODEL.md 2: v = dot(sensitivity, (y, y, y))).
-double neutral_weight(const Layer& layer)
-{
-    return layer.sensitivity[0] + layer.sensitivity[1] + layer.sensitivity[2];
-}
-
-}  // namespace
 
 Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
@@ -112,12 +102,12 @@ double neutral_log_factor(const Stock& stock, const std::vector<ExpectedCurve>& 
         return 0.0;
     // The neutral grey y that gives layer k the value v: every layer j
     // then has y * w_j.
-    const double grey = value / neutral_weight(stock.layers[k]);
+    const double grey = value / stock.layers[k].neutral_weight();
     double log_factor = 0.0;
     for (size_t j = 0; j < plain.size(); ++j)
         if (stock.inhibition[k][j] != 0.0)
             log_factor += stock.inhibition[k][j]
-                          * (plain[j].density_at(grey * neutral_weight(stock.layers[j]))
+                          * (plain[j].density_at(grey * stock.layers[j].neutral_weight())
                              - plain[j].base_density);
     return log_factor;
 }

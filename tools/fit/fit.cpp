@@ -701,8 +701,7 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
             if (Status s = expected_curves(stock, scene, ExpectedCurveOptions(), curves); !s)
                 return s;
             const ExpectedCurve& c = curves[l];
-            const double sens      = stock.layers[l].sensitivity[0] + stock.layers[l].sensitivity[1]
-                                + stock.layers[l].sensitivity[2];
+            const double sens      = stock.layers[l].neutral_weight();
             for (size_t g = 0; g < t.granularity.size(); ++g) {
                 const sm::GranularityTarget& gt = t.granularity[g];
                 const double d = gt.net ? c.min_density() + gt.density : gt.density;

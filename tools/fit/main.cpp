@@ -106,8 +106,7 @@ Status write_curves(const Stock& stock, const sm::Datasheet& sheet,
         if (Status s = filmgrain::expected_curves(stock, scene, curve, curves); !s)
             return s;
         for (size_t l = 0; l < curves.size(); ++l) {
-            const double sens = stock.layers[l].sensitivity[0] + stock.layers[l].sensitivity[1]
-                                + stock.layers[l].sensitivity[2];
+            const double sens = stock.layers[l].neutral_weight();
             for (size_t k = 1; k < curves[l].points.size(); k += 4)
                 out << t << "," << curves[l].layer << ","
                     << std::log10(curves[l].points[k].exposure_lxs / sens) << ","

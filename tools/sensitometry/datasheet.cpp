@@ -201,10 +201,6 @@ Status parse(const Json& j, Datasheet& d)
     return {};
 }
 
-double sensitivity_sum(const Layer& layer)
-{
-    return layer.sensitivity[0] + layer.sensitivity[1] + layer.sensitivity[2];
-}
 
 /// log2(10): stops per decade.
 constexpr double kStopsPerDecade = 3.3219280948873623;
@@ -345,7 +341,7 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
     std::vector<double> speed_h(stock.layers.size()), speed_h_err(stock.layers.size());
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const ExpectedCurve& c = ref.curves[l];
-        const double sens      = sensitivity_sum(stock.layers[l]);
+        const double sens      = stock.layers[l].neutral_weight();
         speed_h[l] = log10_exposure_at_density(c, sens, c.min_density() + crit_net);
         if (!std::isfinite(speed_h[l]))
             return Status::errorf("layer ", stock.layers[l].name,
@@ -377,7 +373,7 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
         const LayerTargets& t  = sheet.layers[i];
         const size_t l         = static_cast<size_t>(index[i]);
         const ExpectedCurve& c = ref.curves[l];
-        const double sens      = sensitivity_sum(stock.layers[l]);
+        const double sens      = stock.layers[l].neutral_weight();
         const double lxs_per_value = ref.models[l]->lxs_per_value();
         DatasheetFigures::Layer f;
         f.name          = t.name;
@@ -427,7 +423,7 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             const Curves c0 = curves_at(stock, sheet.reciprocity_reference_s, models);
             for (size_t l = 0; l < stock.layers.size(); ++l) {
                 const ExpectedCurve& c = c0.curves[l];
-                h0[l]     = log10_exposure_at_density(c, sensitivity_sum(stock.layers[l]),
+                h0[l]     = log10_exposure_at_density(c, stock.layers[l].neutral_weight(),
                                                       c.min_density() + crit_net);
                 h0_err[l] = log10_h_error(c, c.value_at_density(c.min_density() + crit_net));
             }
@@ -439,7 +435,7 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             for (size_t l = 0; l < stock.layers.size(); ++l) {
                 const ExpectedCurve& c = ct.curves[l];
                 const double v  = c.value_at_density(c.min_density() + crit_net);
-                const double h  = log10_exposure_at_density(c, sensitivity_sum(stock.layers[l]),
+                const double h  = log10_exposure_at_density(c, stock.layers[l].neutral_weight(),
                                                             c.min_density() + crit_net);
                 const double stops = std::isfinite(h) ? kStopsPerDecade * (h - h0[l]) : INFINITY;
                 per_layer.push_back(stops);

@@ -92,6 +92,10 @@ struct Layer {
 
     /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
     /// without spread is rendered exactly as before the keys existed.
+    /// The layer's exposure value per unit of a neutral grey (MODEL.md 2:
+    /// v = dot(sensitivity, (y, y, y))): the sum of the weights.
+    double neutral_weight() const { return sensitivity[0] + sensitivity[1] + sensitivity[2]; }
+
     bool spreads_light() const
     {
         return (scatter > 0.0 && scatter_sigma_um > 0.0)
