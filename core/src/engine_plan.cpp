@@ -643,9 +643,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
 
     // Scale (MODEL.md 5 at pixel scale): a layer whose grains all run the
     // kernel is drawn from its pixel statistics where they describe it:
-    // every grain (to z = 4) smaller than the pixel, and enough
-    // developed grains per pixel even at zero exposure (fog) for its
-    // Gamma law (measured in docs/performance).
+    // pixel correlations that end within kMaxLag pixels (at most 1% of
+    // their sum beyond), and enough developed grains per pixel even at zero
+    // exposure (fog) for its Gamma law (measured in docs/performance).
     for (size_t l = 0; l < out.size() && !exact; ++l) {
         LayerPlan& plan = out[l];
         const Layer& layer = stock.layers[l];
@@ -658,16 +658,16 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                                   "kinetics=chain|early|table, grains=exact and populations with "
                                   "rate_area_exponent != 0 do not have: use scale=grain");
         // Each developed grain's image (MODEL.md 5 or 8): its blocking area
-        // and overlap enter the statistics; the neighbour correlations it
-        // makes (a silver disc's diameter, a gaussian cloud's overlap to
-        // 1e-3 of its peak) must stay within a pixel.
+        // and overlap enter the statistics and make the pixel correlations.
         const ImageOverlap image(layer);
-        double largest_um = 0.0;
+        double median_range_um = 0.0;
         for (const PopulationPlan& pp : plan.populations)
-            largest_um = std::max(largest_um,
-                                  image.correlation_range_um(pp.grains.radius_at_z_um(4.0)));
+            median_range_um = std::max(median_range_um,
+                                       image.correlation_range_um(pp.grains.radius_at_z_um(0.0)));
         const double pitch_um = std::min(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
-        if (!settings.scale && largest_um > pitch_um)
+        // Cheap refusals first (auto): a median grain's image reaching past
+        // the lags kept, or too few developed grains at fog.
+        if (!settings.scale && median_range_um > (kMaxLag + 1) * pitch_um)
             continue;
         const auto t0 = std::chrono::steady_clock::now();
         std::vector<PixelPopulation> pops;
@@ -675,30 +675,46 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pops.push_back({ &layer.populations[p], &plan.populations[p].grains,
                              plan.populations[p].photons_per_value_um2,
                              plan.populations[p].curve.get(), plan.populations[p].table.get() });
+        const double fog_grains
+            = PixelModel::compute(pops, frame.scan_pitch_x_um, frame.scan_pitch_y_um, 0.0, image)
+                  .developed_per_pixel;
+        if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
+            continue;
         // An inhibited layer (MODEL.md 10): its statistics over the log
         // factor too, up to the stock's bound on it.
         const double max_log_factor
             = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
         auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
                                                         frame.scan_pitch_y_um, image,
-                                                        max_log_factor);
-        const double fog_grains = model->at(0.0).developed_per_pixel;
-        if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
-            continue;
+                                                        max_log_factor, settings.nthreads);
+        plan.setup_seconds
+            += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (model->lags() < 0) {
+            if (!settings.scale)
+                continue;
+            return Status::errorf("scale=pixel: layer '", layer.name,
+                                  "': its pixels' correlations reach beyond ", kMaxLag,
+                                  " pixels (", format_g(100.0 * model->max_dropped_correlation()),
+                                  "% of their sum left out there: grains or clouds too large "
+                                  "for ", format_g(pitch_um), " um pixels): use scale=grain");
+        }
         plan.pixel_model = std::move(model);
         plan.pixel_key   = hash_ids(grain_seed(scene), 0x9133, l);
         plan.dye_samples = 0;  // no per-grain image
-        plan.setup_seconds
-            += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const PixelModel& pm = *plan.pixel_model;
+        // The table's interpolation error of the mean transmittance, as
+        // density.
+        plan.error_estimate += kLog10E * pm.max_mean_error();
         std::ostringstream why;
         why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
-            << " up to " << format_g(largest_um) << " um in "
-            << format_g(pitch_um) << " um pixels, " << format_g(fog_grains)
+            << " in " << format_g(pitch_um) << " um pixels, " << format_g(fog_grains)
             << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
                "(interpolation error: mean "
-            << format_g(plan.pixel_model->max_mean_error()) << ", sd "
-            << format_g(plan.pixel_model->max_sd_error())
-            << "), a Gamma law through a Gaussian copula with the neighbour correlations"
+            << format_g(pm.max_mean_error()) << ", sd " << format_g(pm.max_sd_error())
+            << "), a Gamma law through a Gaussian copula with the correlations to " << pm.lags()
+            << " pixels each way (" << format_g(100.0 * pm.max_dropped_correlation())
+            << "% of their sum beyond; its filter on " << filter_lags(pm.lags())
+            << " lags, correlation error " << format_g(pm.max_copula_error()) << ")"
             << (plan.inhibition ? ", every P thinned by the inhibitors' factor at the pixel's "
                                   "centre (tabulated to log factor "
                                       + format_g(max_log_factor) + ")"

@@ -2,9 +2,12 @@
 #include "pixel_model.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <functional>
 
 #include "dye.h"
+#include "parallel.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -96,6 +99,7 @@ public:
             for (size_t k = 0; k < sz.r_um.size(); ++k)
                 for (int j = 0; j < kDistanceNodes; ++j)
                     sz.overlap_um2.push_back(image.overlap_um2(sz.r_um[k], (j + 0.5) * m_dh_um));
+        lag_weights();
     }
 
     /// Moments at exposure value v, every P times `factor` (MODEL.md 10).
@@ -122,31 +126,70 @@ public:
         }
         m.mean = std::exp(-exponent);
         m.developed_per_pixel = developed * m_px_um * m_py_um;
-        // Pixel variance and neighbour covariances: the covariance C(h)
-        // against the overlap of a pixel with itself (or its neighbour)
-        // shifted by h, averaged over directions (valid while the largest
-        // grain is smaller than the pixel).
-        const double px = m_px_um, py = m_py_um, dh = m_dh_um;
-        const double a2 = px * py * px * py;
-        double var = 0.0, cx = 0.0, cy = 0.0, cd = 0.0;
+        // The pixel covariances: C(h) at each distance node against the
+        // lags' weights (lag_weights).
+        LagArray cov {};
+        double integral = 0.0;
         for (int j = 0; j < kDistanceNodes; ++j) {
-            const double h = (j + 0.5) * dh;  // micrometres
             const double c = m.mean * m.mean * std::expm1(g[static_cast<size_t>(j)]);
-            var += c * 2.0 * M_PI * h * (px * py - 2.0 / M_PI * (px + py) * h + h * h / M_PI);
-            cx += c * h * (2.0 * h * py - h * h);
-            cy += c * h * (2.0 * h * px - h * h);
-            cd += c * h * h * h / 2.0;
+            const double* w = &m_lag_weight[static_cast<size_t>(j) * kLagCount];
+            for (int lag = 0; lag < kLagCount; ++lag)
+                cov[static_cast<size_t>(lag)] += c * w[lag];
+            integral += c * m_area_weight[static_cast<size_t>(j)];
         }
-        m.variance = std::max(0.0, var * dh / a2);
+        m.variance = std::max(0.0, cov[0]);
         if (m.variance > 0.0) {
-            m.rho_x  = cx * dh / a2 / m.variance;
-            m.rho_y  = cy * dh / a2 / m.variance;
-            m.rho_xy = cd * dh / a2 / m.variance;
+            for (int lag = 0; lag < kLagCount; ++lag)
+                m.correlation[static_cast<size_t>(lag)] = cov[static_cast<size_t>(lag)] / m.variance;
+            m.correlation_sum = integral / m.variance;
+        } else {
+            m.correlation[0] = 1.0;
+            m.correlation_sum = 1.0;
         }
         return m;
     }
 
 private:
+    /// The weight of each distance node h in the covariance of each lag
+    /// (i, j): Cov(i, j) = sum over nodes of C(h) times
+    ///   h dh / A^2  int_0^{pi/2} [T_x(h c - i px) + T_x(h c + i px)]
+    ///                            [T_y(h s - j py) + T_y(h s + j py)] dtheta,
+    /// the four quadrants of the circle of radius h folded onto the first
+    /// (c = cos theta, s = sin theta), by the midpoint rule on 256 angles
+    /// (the integrand is piecewise smooth; at lag 0 below a pixel it agrees
+    /// with the closed form 2 pi h (A - 2 (px + py) h / pi + h^2 / pi) / A^2
+    /// to 1e-5: core PixelModel.LagWeightsAreThePixelOverlaps); and of the
+    /// plane, 2 pi h dh / A (the sum over all lags: the T's of a row of
+    /// pixels sum to the pitch).
+    void lag_weights()
+    {
+        constexpr int kAngles = 256;
+        const double px = m_px_um, py = m_py_um, dh = m_dh_um, a = px * py;
+        const auto tri = [](double t, double pitch) { return std::max(0.0, pitch - std::fabs(t)); };
+        m_lag_weight.assign(static_cast<size_t>(kDistanceNodes) * kLagCount, 0.0);
+        m_area_weight.assign(kDistanceNodes, 0.0);
+        const double dtheta = 0.5 * M_PI / kAngles;
+        for (int n = 0; n < kDistanceNodes; ++n) {
+            const double h = (n + 0.5) * dh;
+            m_area_weight[static_cast<size_t>(n)] = 2.0 * M_PI * h * dh / a;
+            double* w = &m_lag_weight[static_cast<size_t>(n) * kLagCount];
+            for (int t = 0; t < kAngles; ++t) {
+                const double theta = (t + 0.5) * dtheta;
+                const double hc = h * std::cos(theta), hs = h * std::sin(theta);
+                double tx[kLagSide], ty[kLagSide];
+                for (int i = 0; i < kLagSide; ++i) {
+                    tx[i] = tri(hc - i * px, px) + tri(hc + i * px, px);
+                    ty[i] = tri(hs - i * py, py) + tri(hs + i * py, py);
+                }
+                for (int j = 0; j < kLagSide; ++j)
+                    for (int i = 0; i < kLagSide; ++i)
+                        w[j * kLagSide + i] += tx[i] * ty[j];
+            }
+            for (int lag = 0; lag < kLagCount; ++lag)
+                w[lag] *= h * dh * dtheta / (a * a);
+        }
+    }
+
     struct Sizes {
         std::vector<double> r_um, w, overlap_um2;  // [size node][distance node]
     };
@@ -154,17 +197,121 @@ private:
     const ImageOverlap& m_image;
     double m_px_um, m_py_um, m_dh_um = 0.0;
     std::vector<Sizes> m_sizes;
+    std::vector<double> m_lag_weight;   // [distance node][lag]
+    std::vector<double> m_area_weight;  // [distance node]
 };
+
+/// The multiplicity of lag i of a symmetric field: i and -i.
+inline double multiplicity(int i) { return i == 0 ? 1.0 : 2.0; }
+
+/// The share of correlation_sum outside the lags |i|, |j| <= lags.
+double dropped_correlation(const PixelModel::Moments& m, int lags)
+{
+    double kept = 0.0;
+    for (int j = 0; j <= lags; ++j)
+        for (int i = 0; i <= lags; ++i)
+            kept += multiplicity(i) * multiplicity(j)
+                    * m.correlation[static_cast<size_t>(j * kLagSide + i)];
+    return m.correlation_sum > 0.0 ? std::max(0.0, 1.0 - kept / m.correlation_sum) : 0.0;
+}
+
+/// The logarithm the table interpolates means and variances in (both are
+/// near exponential in the exposure's logarithm: a transmittance is
+/// exp(-coverage exponent)); floored so that a zero stays finite.
+inline double table_log(double x) { return std::log(std::max(x, 1e-300)); }
 
 PixelModel::Moments lerp(const PixelModel::Moments& a, const PixelModel::Moments& b, double t)
 {
     const auto l = [t](double x, double y) { return x + t * (y - x); };
-    return { l(a.mean, b.mean), l(a.variance, b.variance), l(a.rho_x, b.rho_x),
-             l(a.rho_y, b.rho_y), l(a.rho_xy, b.rho_xy),
-             l(a.developed_per_pixel, b.developed_per_pixel) };
+    const auto g = [t](double x, double y) {
+        return std::exp(table_log(x) + t * (table_log(y) - table_log(x)));
+    };
+    PixelModel::Moments m;
+    m.mean                = g(a.mean, b.mean);
+    m.variance            = g(a.variance, b.variance);
+    m.correlation_sum     = l(a.correlation_sum, b.correlation_sum);
+    m.developed_per_pixel = l(a.developed_per_pixel, b.developed_per_pixel);
+    for (size_t k = 0; k < m.correlation.size(); ++k)
+        m.correlation[k] = l(a.correlation[k], b.correlation[k]);
+    return m;
+}
+
+/// cos(2 pi k / kGrid) for k in [0, kGrid): copula_filter's transforms.
+constexpr int kGrid = 32;
+const std::array<double, kGrid>& grid_cosines()
+{
+    static const std::array<double, kGrid> c = [] {
+        std::array<double, kGrid> v {};
+        for (int k = 0; k < kGrid; ++k)
+            v[static_cast<size_t>(k)] = std::cos(2.0 * M_PI * k / kGrid);
+        return v;
+    }();
+    return c;
 }
 
 }  // namespace
+
+double copula_filter(const LagArray& rho, int lags, LagArray& f)
+{
+    static_assert(4 * kMaxLag + 1 <= kGrid, "the filter's autocorrelation must not wrap");
+    const int support = filter_lags(lags);
+    const auto& cs = grid_cosines();
+    const auto cosine = [&](int u, int i) { return cs[static_cast<size_t>((u * i) % kGrid)]; };
+    const auto at = [](const LagArray& a, int i, int j) {
+        return a[static_cast<size_t>(j * kLagSide + i)];
+    };
+    // Power spectrum of the symmetric correlation on the lags kept
+    // (a cosine transform: rho is even in each axis), its square root, and
+    // back to the filter's lags.
+    std::vector<double> root(kGrid * kGrid);
+    for (int v = 0; v < kGrid; ++v)
+        for (int u = 0; u < kGrid; ++u) {
+            double s = 0.0;
+            for (int j = 0; j <= lags; ++j)
+                for (int i = 0; i <= lags; ++i)
+                    s += multiplicity(i) * multiplicity(j) * at(rho, i, j) * cosine(u, i)
+                         * cosine(v, j);
+            root[static_cast<size_t>(v * kGrid + u)] = std::sqrt(std::max(0.0, s));
+        }
+    f.fill(0.0);
+    double norm = 0.0;
+    for (int j = 0; j <= support; ++j)
+        for (int i = 0; i <= support; ++i) {
+            double s = 0.0;
+            for (int v = 0; v < kGrid; ++v)
+                for (int u = 0; u < kGrid; ++u)
+                    s += root[static_cast<size_t>(v * kGrid + u)] * cosine(u, i) * cosine(v, j);
+            s /= kGrid * kGrid;
+            f[static_cast<size_t>(j * kLagSide + i)] = s;
+            norm += multiplicity(i) * multiplicity(j) * s * s;
+        }
+    if (!(norm > 0.0)) {
+        f.fill(0.0);
+        f[0] = 1.0;
+        norm = 1.0;
+    }
+    for (double& t : f)
+        t /= std::sqrt(norm);
+    // The cut filter's autocorrelation against rho, at every lag it reaches.
+    const int side = 2 * support + 1;
+    std::vector<double> full(static_cast<size_t>(side * side));
+    for (int b = -support; b <= support; ++b)
+        for (int a = -support; a <= support; ++a)
+            full[static_cast<size_t>((b + support) * side + a + support)]
+                = at(f, std::abs(a), std::abs(b));
+    double error = 0.0;
+    for (int j = 0; j < side; ++j)
+        for (int i = 0; i < side; ++i) {
+            double acf = 0.0;
+            for (int b = 0; b + j < side; ++b)
+                for (int a = 0; a + i < side; ++a)
+                    acf += full[static_cast<size_t>(b * side + a)]
+                           * full[static_cast<size_t>((b + j) * side + a + i)];
+            const double want = (i <= kMaxLag && j <= kMaxLag) ? at(rho, i, j) : 0.0;
+            error = std::max(error, std::fabs(acf - want));
+        }
+    return error;
+}
 
 PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& populations,
                                         double px_um, double py_um, double v,
@@ -174,7 +321,8 @@ PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& popu
 }
 
 PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,
-                       double py_um, const ImageOverlap& image, double max_log_factor)
+                       double py_um, const ImageOverlap& image, double max_log_factor,
+                       int nthreads)
 {
     const Integrator moments(populations, px_um, py_um, image);
     const int n   = (kOctavesBelow + kOctavesAbove) * kPerOctave;
@@ -186,69 +334,157 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
                          ? static_cast<int>(std::ceil(max_log_factor / kLogFactorStep)) + 1
                          : 1;
     const auto factor = [](double l) { return l > 0.0 ? std::exp(-l) : 1.0; };
-    const auto note_error = [&](const Moments& exact, const Moments& interp) {
-        if (exact.mean > 0.0)
-            m_max_mean_error = std::max(m_max_mean_error,
-                                        std::fabs(interp.mean - exact.mean) / exact.mean);
-        if (exact.variance > 0.0)
-            m_max_sd_error = std::max(m_max_sd_error,
-                                      std::fabs(std::sqrt(interp.variance / exact.variance) - 1.0));
+    // Every node (and every midpoint the errors are measured at) is
+    // independent of the others: computed in parallel, each into its own
+    // slot, so the table is the same for any thread count.
+    const size_t cols = static_cast<size_t>(n) + 2;  // v = 0, then n + 1 values
+    const auto node_v = [&](size_t i) { return i == 0 ? 0.0 : value(static_cast<double>(i) - 1.0); };
+    std::atomic<bool> stop { false };
+    const auto each = [&](size_t count, const std::function<void(size_t)>& body) {
+        parallel_for(static_cast<int64_t>(count), nthreads, stop,
+                     [&](int, int64_t k) { body(static_cast<size_t>(k)); });
     };
-    for (int r = 0; r < rows; ++r) {
-        const double f = factor(r * kLogFactorStep);
-        std::vector<Moments> nodes;
-        nodes.push_back(moments(0.0, f));
-        for (int i = 0; i <= n; ++i)
-            nodes.push_back(moments(value(i), f));
-        for (int i = 0; i < n; ++i)
-            note_error(moments(value(i + 0.5), f),
-                       lerp(nodes[static_cast<size_t>(i) + 1], nodes[static_cast<size_t>(i) + 2], 0.5));
-        m_rows.push_back(std::move(nodes));
+    m_rows.assign(static_cast<size_t>(rows), std::vector<Moments>(cols));
+    each(rows * cols, [&](size_t k) {
+        const size_t r = k / cols, i = k % cols;
+        m_rows[r][i] = moments(node_v(i), factor(static_cast<double>(r) * kLogFactorStep));
+    });
+    // Interpolation errors: at exposure midpoints of every row, and at
+    // log-factor midpoints of every exposure node.
+    const size_t v_mid = static_cast<size_t>(rows) * static_cast<size_t>(n);
+    const size_t l_mid = static_cast<size_t>(rows - 1) * cols;
+    std::vector<double> mean_error(v_mid + l_mid, 0.0), sd_error(v_mid + l_mid, 0.0);
+    each(v_mid + l_mid, [&](size_t k) {
+        Moments exact, interp;
+        if (k < v_mid) {
+            const size_t r = k / static_cast<size_t>(n), i = k % static_cast<size_t>(n);
+            exact  = moments(value(static_cast<double>(i) + 0.5),
+                             factor(static_cast<double>(r) * kLogFactorStep));
+            interp = lerp(m_rows[r][i + 1], m_rows[r][i + 2], 0.5);
+        } else {
+            const size_t r = (k - v_mid) / cols, i = (k - v_mid) % cols;
+            exact  = moments(node_v(i), factor((static_cast<double>(r) + 0.5) * kLogFactorStep));
+            interp = lerp(m_rows[r][i], m_rows[r + 1][i], 0.5);
+        }
+        if (exact.mean > 0.0)
+            mean_error[k] = std::fabs(interp.mean - exact.mean) / exact.mean;
+        if (exact.variance > 0.0)
+            sd_error[k] = std::fabs(std::sqrt(interp.variance / exact.variance) - 1.0);
+    });
+    for (size_t k = 0; k < mean_error.size(); ++k) {
+        m_max_mean_error = std::max(m_max_mean_error, mean_error[k]);
+        m_max_sd_error   = std::max(m_max_sd_error, sd_error[k]);
     }
-    // Between log-factor nodes, at every exposure node.
-    for (int r = 0; r + 1 < rows; ++r) {
-        const double f = factor((r + 0.5) * kLogFactorStep);
-        for (int i = 0; i <= n + 1; ++i)
-            note_error(moments(i == 0 ? 0.0 : value(i - 1), f),
-                       lerp(m_rows[static_cast<size_t>(r)][static_cast<size_t>(i)],
-                            m_rows[static_cast<size_t>(r) + 1][static_cast<size_t>(i)], 0.5));
+    // The lags kept: the fewest that leave at most kDroppedCorrelation of
+    // the correlation out at every node.
+    m_lags = -1;
+    for (int k = 0; k <= kMaxLag && m_lags < 0; ++k) {
+        double worst = 0.0;
+        for (const auto& row : m_rows)
+            for (const Moments& m : row)
+                worst = std::max(worst, dropped_correlation(m, k));
+        m_max_dropped = worst;
+        if (worst <= kDroppedCorrelation)
+            m_lags = k;
     }
+    // The nodes as drawn: each with its copula filter, for the normals'
+    // correlation that skewed_draw bends into the model's.
+    m_nodes.assign(static_cast<size_t>(rows), std::vector<Node>(cols));
+    std::vector<double> copula_error(rows * cols, 0.0);
+    each(rows * cols, [&](size_t k) {
+        const size_t r = k / cols, i = k % cols;
+        const Moments& m = m_rows[r][i];
+        Node& node       = m_nodes[r][i];
+        node.log_mean     = table_log(m.mean);
+        node.log_variance = table_log(m.variance);
+        if (m_lags < 0)
+            return;
+        LagArray normal {};
+        for (size_t j = 0; j < normal.size(); ++j)
+            normal[j] = copula_normal_correlation(m.mean, m.variance, m.correlation[j]);
+        copula_error[k] = copula_filter(normal, m_lags, node.taps);
+    });
+    for (double e : copula_error)
+        m_max_copula_error = std::max(m_max_copula_error, e);
 }
 
-PixelModel::Moments PixelModel::row_at(const std::vector<Moments>& row, double v) const
+PixelModel::Position PixelModel::position(double v, double log_factor) const
 {
-    if (!(v > 0.0))
-        return row.front();
-    const double t = (std::log(v) - m_log_v0) * m_inv_step;
-    if (t <= 0.0)
-        return row[1];
-    const size_t i = static_cast<size_t>(t);
-    if (i + 2 >= row.size())
-        return row.back();
-    return lerp(row[i + 1], row[i + 2], t - static_cast<double>(i));
+    Position p;
+    const size_t last = m_rows.front().size() - 1;
+    if (v > 0.0) {
+        const double t = (std::log(v) - m_log_v0) * m_inv_step;
+        if (t <= 0.0) {
+            p.i0 = p.i1 = 1;
+        } else if (static_cast<size_t>(t) + 2 > last) {
+            p.i0 = p.i1 = last;
+        } else {
+            const size_t i = static_cast<size_t>(t);
+            p.i0 = i + 1;
+            p.i1 = i + 2;
+            p.ti = t - static_cast<double>(i);
+        }
+    }
+    const double t = log_factor / kLogFactorStep;
+    if (m_rows.size() > 1 && t > 0.0) {
+        const size_t r = static_cast<size_t>(t);
+        if (r + 1 >= m_rows.size()) {
+            p.r0 = p.r1 = m_rows.size() - 1;
+        } else {
+            p.r0 = r;
+            p.r1 = r + 1;
+            p.tr = t - static_cast<double>(r);
+        }
+    }
+    return p;
 }
 
 PixelModel::Moments PixelModel::at(double v, double log_factor) const
 {
-    const double t = log_factor / kLogFactorStep;
-    if (m_rows.size() == 1 || !(t > 0.0))
-        return row_at(m_rows.front(), v);
-    const size_t r = static_cast<size_t>(t);
-    if (r + 1 >= m_rows.size())
-        return row_at(m_rows.back(), v);
-    return lerp(row_at(m_rows[r], v), row_at(m_rows[r + 1], v), t - static_cast<double>(r));
+    const Position p = position(v, log_factor);
+    const auto row = [&](size_t r) { return lerp(m_rows[r][p.i0], m_rows[r][p.i1], p.ti); };
+    return lerp(row(p.r0), row(p.r1), p.tr);
 }
 
-void moving_average_taps(double rho, double taps[3])
+void PixelModel::draw_at(double v, double log_factor, Draw& out) const
 {
-    // Correlation of [b, 1, b] with itself shifted by one: 2 b / (1 + 2 b^2),
-    // at most 1/sqrt(2) (b = 1/sqrt(2)).
-    const double r = std::clamp(rho, -M_SQRT1_2, M_SQRT1_2);
-    const double b = std::fabs(r) < 1e-12 ? 0.0 : (1.0 - std::sqrt(1.0 - 2.0 * r * r)) / (2.0 * r);
-    const double norm = 1.0 / std::sqrt(1.0 + 2.0 * b * b);
-    taps[0] = taps[2] = b * norm;
-    taps[1] = norm;
+    const Position p = position(v, log_factor);
+    const Node* n[4] = { &m_nodes[p.r0][p.i0], &m_nodes[p.r0][p.i1], &m_nodes[p.r1][p.i0],
+                         &m_nodes[p.r1][p.i1] };
+    const double w[4] = { (1.0 - p.tr) * (1.0 - p.ti), (1.0 - p.tr) * p.ti, p.tr * (1.0 - p.ti),
+                          p.tr * p.ti };
+    double log_mean = 0.0, log_variance = 0.0;
+    out.taps.fill(0.0);
+    const int k = filter_lags(std::max(m_lags, 0));
+    for (int c = 0; c < 4; ++c) {
+        log_mean += w[c] * n[c]->log_mean;
+        log_variance += w[c] * n[c]->log_variance;
+        for (int j = 0; j <= k; ++j)
+            for (int i = 0; i <= k; ++i)
+                out.taps[static_cast<size_t>(j * kLagSide + i)]
+                    += w[c] * n[c]->taps[static_cast<size_t>(j * kLagSide + i)];
+    }
+    out.mean     = std::exp(log_mean);
+    out.variance = std::exp(log_variance);
 }
+
+namespace {
+
+/// The Wilson-Hilferty cube of skewed_draw for (mean, variance): the part
+/// m (a + b z)^3 with a = 1 - c, b = sqrt(c), c = 1 / (9 k), k = m^2 / V;
+/// false where the draw is its mean (no variance).
+bool wilson_hilferty(double mean, double variance, double& a, double& b)
+{
+    const double m = mean >= 0.5 ? 1.0 - mean : mean;
+    if (!(m > 0.0) || !(variance > 0.0))
+        return false;
+    const double c = variance / (9.0 * m * m);
+    a = 1.0 - c;
+    b = std::sqrt(c);
+    return true;
+}
+
+}  // namespace
 
 double skewed_draw(double mean, double variance, double z)
 {
@@ -259,15 +495,34 @@ double skewed_draw(double mean, double variance, double z)
     // mass near 0. Gamma(shape k = m^2 / V, scale V / m) by the
     // Wilson-Hilferty cube of a normal (z, the pixel's correlated normal:
     // a Gaussian copula).
+    double a = 0.0, b = 0.0;
+    if (!wilson_hilferty(mean, variance, a, b))
+        return mean;
     const bool open = mean >= 0.5;
     const double m  = open ? 1.0 - mean : mean;
-    if (!(m > 0.0) || !(variance > 0.0))
-        return mean;
-    const double k = m * m / variance;
-    const double c = 1.0 / (9.0 * k);
-    const double w = std::max(0.0, 1.0 - c + z * std::sqrt(c));
-    const double g = std::min(1.0, m * w * w * w);
+    const double w  = std::max(0.0, a + z * b);
+    const double g  = std::min(1.0, m * w * w * w);
     return open ? 1.0 - g : g;
+}
+
+double copula_normal_correlation(double mean, double variance, double rho)
+{
+    double a = 0.0, b = 0.0;
+    if (!wilson_hilferty(mean, variance, a, b) || !(rho > 0.0))
+        return std::max(0.0, rho);
+    if (rho >= 1.0)
+        return 1.0;
+    // (a + b z)^3 = (a^3 + 3 a b^2) + (3 a^2 b + 3 b^3) He1 + 3 a b^2 He2 + b^3 He3.
+    const double c1 = 3.0 * a * a * b + 3.0 * b * b * b, c2 = 3.0 * a * b * b, c3 = b * b * b;
+    const double w1 = c1 * c1, w2 = 2.0 * c2 * c2, w3 = 6.0 * c3 * c3;
+    const double total = w1 + w2 + w3;
+    // Increasing on [0, 1] from 0 to 1: bisection to 1e-12.
+    double lo = 0.0, hi = 1.0;
+    for (int i = 0; i < 42; ++i) {
+        const double r = 0.5 * (lo + hi);
+        ((w1 * r + w2 * r * r + w3 * r * r * r) / total < rho ? lo : hi) = r;
+    }
+    return 0.5 * (lo + hi);
 }
 
 void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x0, int64_t y0,
@@ -275,29 +530,46 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
                                 const double* log_factor, double* transmittance)
 {
     const int64_t tw = x1 - x0, th = y1 - y0;
-    // Standard normals of the block and a one-pixel margin, each keyed by
-    // its absolute pixel.
-    const int64_t zw = tw + 2;
-    std::vector<double> z(static_cast<size_t>(zw * (th + 2)));
-    for (int64_t j = 0; j < th + 2; ++j)
+    const int k = filter_lags(std::max(model.lags(), 0));
+    // Standard normals of the block and a margin of the filter's lags, each
+    // keyed by its absolute pixel.
+    const int64_t zw = tw + 2 * k;
+    std::vector<double> z(static_cast<size_t>(zw * (th + 2 * k)));
+    for (int64_t j = 0; j < th + 2 * k; ++j)
         for (int64_t i = 0; i < zw; ++i) {
-            const uint64_t id = hash_ids(key, static_cast<uint64_t>(x0 + i - 1),
-                                         static_cast<uint64_t>(y0 + j - 1));
+            const uint64_t id = hash_ids(key, static_cast<uint64_t>(x0 + i - k),
+                                         static_cast<uint64_t>(y0 + j - k));
             const double u = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
             z[static_cast<size_t>(j * zw + i)] = normal_quantile(u);
         }
+    PixelModel::Draw d;
     for (int64_t j = 0; j < th; ++j)
         for (int64_t i = 0; i < tw; ++i) {
             const size_t o = static_cast<size_t>(j * tw + i);
-            const PixelModel::Moments m = model.at(v[o], log_factor ? log_factor[o] : 0.0);
-            double kx[3], ky[3];
-            moving_average_taps(m.rho_x, kx);
-            moving_average_taps(m.rho_y, ky);
-            double noise = 0.0;
-            for (int dy = 0; dy < 3; ++dy)
-                for (int dx = 0; dx < 3; ++dx)
-                    noise += ky[dy] * kx[dx] * z[static_cast<size_t>((j + dy) * zw + i + dx)];
-            transmittance[o] = skewed_draw(m.mean, m.variance, noise);
+            model.draw_at(v[o], log_factor ? log_factor[o] : 0.0, d);
+            // The filter on the normals around (i, j): each tap (a, b)
+            // weighs the normals at (+-a, +-b); its sum of squares, which
+            // interpolation leaves within rounding of 1 only at nodes,
+            // normalises.
+            const double* centre = &z[static_cast<size_t>((j + k) * zw + i + k)];
+            double noise = 0.0, norm = 0.0;
+            for (int b = 0; b <= k; ++b)
+                for (int a = 0; a <= k; ++a) {
+                    const double t = d.taps[static_cast<size_t>(b * kLagSide + a)];
+                    const int64_t dx = a, dy = b * zw;
+                    double s = centre[dy + dx];
+                    if (a > 0)
+                        s += centre[dy - dx];
+                    if (b > 0) {
+                        s += centre[-dy + dx];
+                        if (a > 0)
+                            s += centre[-dy - dx];
+                    }
+                    noise += t * s;
+                    norm += (a > 0 ? 2.0 : 1.0) * (b > 0 ? 2.0 : 1.0) * t * t;
+                }
+            transmittance[o]
+                = skewed_draw(d.mean, d.variance, norm > 0.0 ? noise / std::sqrt(norm) : 0.0);
         }
 }
 

@@ -9,20 +9,24 @@
 // has mean  mu = exp(-sum_p n_p E[a P])  and covariance at distance h
 //   C(h) = mu^2 (exp(sum_p n_p E[P K(h; r)]) - 1),
 // K(h; r) the area shared by two discs of radius r at distance h. A pixel's
-// transmittance (its mean over the pixel) then has mean mu, variance
-//   V = (1/A^2) int C(|h|) (px - |hx|)(py - |hy|) d^2h
-// and covariance with its horizontal, vertical and diagonal neighbours from
-// the same integral with the shifted overlap. PixelModel tabulates these over
-// the exposure value v, and the pixel kernel draws each pixel from a Gamma
+// transmittance (its mean over the pixel) then has mean mu, and covariance
+// with the pixel (i, j) away
+//   Cov(i, j) = (1/A^2) int C(|h|) T_x(h_x - i px) T_y(h_y - j py) d^2h,
+// T_x(t) = max(0, px - |t|) the overlap of two pixel rows t apart; V =
+// Cov(0, 0). PixelModel tabulates these over the exposure value v, to
+// kMaxLag pixels each way, and the pixel kernel draws each pixel from a Gamma
 // law with that mean and variance (skewed_draw) through a Gaussian copula:
-// the normal (k * z), z i.i.d. standard normals keyed by absolute pixel
-// (deterministic for any tiling), k a separable 3x3 kernel with the model's
-// neighbour correlations. Exact in mean and variance; the shape and the
-// copula's correlation are approximations, measured against the per-grain
-// kernel in docs/performance; the planner uses it only where grains are
-// many per pixel.
+// the normal (f * z), z i.i.d. standard normals keyed by absolute pixel
+// (deterministic for any tiling), f the symmetric filter whose
+// autocorrelation is the normals' correlation that skewed_draw turns into
+// the model's (copula_normal_correlation, copula_filter). Exact in mean and
+// variance; the shape and the correlations beyond the lags kept are
+// approximations, measured (the second by the model itself, the first
+// against the per-grain kernel in docs/performance); the planner uses it
+// only where grains are many per pixel.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -70,14 +74,42 @@ const std::vector<SizeNode>& size_quadrature(const Population& population);
 /// transmittance is exp(-coverage_exponent).
 double coverage_exponent(const std::vector<PixelPopulation>& populations, double v);
 
+/// The largest lag (in pixels, each axis) whose correlation the pixel scale
+/// keeps: a layer whose correlations reach further (grains or clouds larger
+/// than about a pixel, more than 1% of the correlation summed over all lags
+/// beyond it) is not drawn at pixel scale.
+inline constexpr int kMaxLag = 4;
+/// Lags (i, j) with 0 <= i, j <= kMaxLag, stored at [j * (kMaxLag + 1) + i]:
+/// the pixel field is symmetric in each axis, so these are all of them.
+inline constexpr int kLagSide  = kMaxLag + 1;
+inline constexpr int kLagCount = kLagSide * kLagSide;
+using LagArray = std::array<double, kLagCount>;
+
+/// The lags of the copula filter for a correlation kept to `lags`: one more
+/// (a cut square root of a spectrum has tails; one lag more cuts its
+/// correlation error about tenfold), at most kMaxLag.
+inline int filter_lags(int lags) { return lags < kMaxLag ? lags + 1 : kMaxLag; }
+
+/// The symmetric filter f on lags |i|, |j| <= filter_lags(lags)
+/// (quarter-stored like LagArray, sum of f^2 over all its taps 1) whose
+/// autocorrelation is the correlation `rho` (LagArray) on lags |i|, |j| <=
+/// `lags` and 0 beyond: the spectral square root on a 32x32 periodic grid
+/// (negative power clamped to 0), cut to its support. Returns the largest
+/// difference between the cut filter's autocorrelation and `rho` (beyond
+/// `lags`: `rho` where it has the lag, else 0) at any lag it reaches.
+double copula_filter(const LagArray& rho, int lags, LagArray& f);
+
 class PixelModel {
 public:
     struct Moments {
         double mean = 0.0;      ///< mu: mean transmittance
         double variance = 0.0;  ///< V: variance of a pixel's transmittance
-        double rho_x = 0.0;     ///< correlation with the horizontal neighbour
-        double rho_y = 0.0;     ///< with the vertical neighbour
-        double rho_xy = 0.0;    ///< with a diagonal neighbour
+        /// Correlation with the pixel (i, j) away (LagArray; [0] = 1).
+        LagArray correlation {};
+        /// The correlation summed over every lag (all signs, to infinity):
+        /// the integral of C over the plane / (A V); a large aperture's
+        /// variance is about V times this.
+        double correlation_sum = 0.0;
         double developed_per_pixel = 0.0;  ///< expected developed grain centres
     };
 
@@ -91,23 +123,51 @@ public:
     /// `max_log_factor` > 0: the layer is inhibited (MODEL.md 10: every P
     /// times exp(-log_factor)), and the table gains a second axis, the log
     /// factor, from 0 to max_log_factor in steps of kLogFactorStep.
+    /// The lags kept (lags()) are the fewest that leave at most
+    /// kDroppedCorrelation of correlation_sum out at every node. Nodes are
+    /// computed on `nthreads` threads (0: all; the table is the same for
+    /// any count).
     PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um,
-               const ImageOverlap& image = ImageOverlap(), double max_log_factor = 0.0);
+               const ImageOverlap& image = ImageOverlap(), double max_log_factor = 0.0,
+               int nthreads = 1);
 
     /// Step of the log-factor axis: the thinning exp(-L) is interpolated
     /// linearly between nodes 0.05 apart (relative error <= 3e-4, measured
     /// with the rest in max_mean_error and max_sd_error).
     static constexpr double kLogFactorStep = 0.05;
+    /// The share of correlation_sum the lags kept may leave out (the
+    /// relative error of a large aperture's variance it allows).
+    static constexpr double kDroppedCorrelation = 0.01;
 
     /// Moments at exposure value v (linear interpolation in log v; v beyond
     /// the table: its last node) and log factor L (linear in L, clamped to
-    /// the table's range; 0 for a layer without inhibition).
+    /// the table's range; 0 for a layer without inhibition); the mean and
+    /// variance are interpolated in their logarithms.
     Moments at(double v, double log_factor = 0.0) const;
+
+    /// What the pixel kernel draws a pixel from: its mean, variance and
+    /// copula filter (LagArray on filter_lags(lags()) lags), interpolated
+    /// like at().
+    struct Draw {
+        double mean = 0.0, variance = 0.0;
+        LagArray taps {};
+    };
+    void draw_at(double v, double log_factor, Draw& out) const;
 
     /// Moments computed directly (no table): for tests and the table.
     static Moments compute(const std::vector<PixelPopulation>& populations, double px_um,
                            double py_um, double v, const ImageOverlap& image = ImageOverlap(),
                            double log_factor = 0.0);
+
+    /// Lags kept each way (0 to kMaxLag), or -1 where even kMaxLag leaves
+    /// more than kDroppedCorrelation out (the pixel scale cannot draw it).
+    int lags() const { return m_lags; }
+    /// Largest share of correlation_sum the lags kept leave out, at the
+    /// worst node (with lags() = -1: at kMaxLag).
+    double max_dropped_correlation() const { return m_max_dropped; }
+    /// Largest error of the copula filters' correlation (copula_filter) at
+    /// any node.
+    double max_copula_error() const { return m_max_copula_error; }
 
     /// Largest relative error of the table's interpolation found at node
     /// midpoints (in v, and in L at every v node), in the mean and in the
@@ -116,23 +176,43 @@ public:
     double max_sd_error() const { return m_max_sd_error; }
 
 private:
-    Moments row_at(const std::vector<Moments>& row, double v) const;
+    /// A node as drawn: the logarithms of its mean and variance (the
+    /// table interpolates them), its filter.
+    struct Node {
+        double log_mean = 0.0, log_variance = 0.0;
+        LagArray taps {};
+    };
+    /// Where (v, L) falls in the table: rows r0, r1 (weight tr on r1),
+    /// exposure nodes i0, i1 (weight ti on i1).
+    struct Position {
+        size_t r0 = 0, r1 = 0, i0 = 0, i1 = 0;
+        double tr = 0.0, ti = 0.0;
+    };
+    Position position(double v, double log_factor) const;
 
     double m_log_v0 = 0.0, m_inv_step = 0.0;
     /// One row of exposure nodes (node 0: v = 0) per log-factor node.
     std::vector<std::vector<Moments>> m_rows;
+    std::vector<std::vector<Node>> m_nodes;  // the same nodes, as drawn
+    int m_lags = 0;
+    double m_max_dropped = 0.0, m_max_copula_error = 0.0;
     double m_max_mean_error = 0.0, m_max_sd_error = 0.0;
 };
-
-/// The weights [beta, 1, beta] / sqrt(1 + 2 beta^2) of a 3-tap moving
-/// average whose neighbour correlation is rho (|rho| <= 1/sqrt(2); larger
-/// values are clamped there).
-void moving_average_taps(double rho, double taps[3]);
 
 /// A pixel's transmittance from its mean and variance and its normal z:
 /// Gamma distributed in its covered part where the mean is at least 1/2,
 /// in its open part below (Wilson-Hilferty), in [0, 1].
 double skewed_draw(double mean, double variance, double z);
+
+/// The correlation two standard normals need for their skewed_draw's (same
+/// mean and variance) to have correlation `rho` in [0, 1]: the
+/// Wilson-Hilferty cube m (a + b z)^3 is c0 + c1 He1 + c2 He2 + c3 He3 in
+/// Hermite polynomials, so the draws' correlation at normal correlation r is
+/// (c1^2 r + 2 c2^2 r^2 + 6 c3^2 r^3) / (c1^2 + 2 c2^2 + 6 c3^2), solved
+/// here for r (exact but for skewed_draw's clamps: the cube's root below
+/// z = -a / b, and 1). Skewed pixels (few grains, or few holes) need
+/// r > rho: their law bends the normals' correlation down.
+double copula_normal_correlation(double mean, double variance, double rho);
 
 /// Writes the transmittance of the pixels [x0, x1) x [y0, y1) of one layer,
 /// row-major into `transmittance`, given each pixel's exposure value in `v`

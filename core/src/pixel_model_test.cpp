@@ -13,27 +13,63 @@
 #include "dye.h"
 #include "grain_kernel.h"
 #include "image_formation.h"
+#include "rng.h"
+#include "sampling.h"
 #include "test_tables.h"
 
 namespace filmgrain {
 namespace {
 
 struct Sample {
-    double mean = 0.0, var = 0.0, rho_x = 0.0;
+    double mean = 0.0, var = 0.0;
+    /// Correlation at lags (1, 0), (2, 0), (1, 1) (x and y pooled).
+    double rho_x = 0.0, rho_2x = 0.0, rho_xy = 0.0;
     double se_mean = 0.0, se_var = 0.0, se_rho = 0.0;
+};
+
+/// The correlation of a square field (n x n, row-major) at lags (1, 0),
+/// (2, 0) and (1, 1), pooled over the axes (and both diagonals), from its
+/// mean and variance.
+struct LagSums {
+    double s10 = 0.0, s20 = 0.0, s11 = 0.0;
+    int n10 = 0, n20 = 0, n11 = 0;
+    void add(const std::vector<double>& t, int n)
+    {
+        const auto at = [&](int x, int y) { return t[static_cast<size_t>(y * n + x)]; };
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                if (x + 1 < n) {
+                    s10 += at(x, y) * at(x + 1, y) + at(y, x) * at(y, x + 1);
+                    n10 += 2;
+                }
+                if (x + 2 < n) {
+                    s20 += at(x, y) * at(x + 2, y) + at(y, x) * at(y, x + 2);
+                    n20 += 2;
+                }
+                if (x + 1 < n && y + 1 < n) {
+                    s11 += at(x, y) * at(x + 1, y + 1) + at(x + 1, y) * at(x, y + 1);
+                    n11 += 2;
+                }
+            }
+    }
+    void correlations(double mean, double var, double& r10, double& r20, double& r11) const
+    {
+        r10 = (s10 / n10 - mean * mean) / var;
+        r20 = (s20 / n20 - mean * mean) / var;
+        r11 = (s11 / n11 - mean * mean) / var;
+    }
 };
 
 /// Pixel transmittances of several 48x48 blocks of 4 um pixels, grain by
 /// grain: exact coverage of silver discs, or (`dye`) the dye image of
 /// MODEL.md 8 at 32 samples per pixel and axis.
 Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullptr,
-                   double factor = 1.0)
+                   double factor = 1.0, int dye_samples = 32)
 {
     constexpr int kBlocks = 12, kN = 48;
     constexpr double kPitch = 4.0;
     std::vector<double> t_all;
-    double sxy = 0.0;
-    int pairs = 0;
+    LagSums lags;
     std::vector<double> means;
     for (int b = 0; b < kBlocks; ++b) {
         const PopulationGrains grains(*pp.population, 100 + b, 0, 0);
@@ -55,7 +91,7 @@ Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullp
         std::vector<double> f(kN * kN);
         if (dye) {
             DyeScratch scratch;
-            dye_transmittance(discs, *dye, 20.0, 0, 0, kN, kN, kPitch, kPitch, 32, scratch,
+            dye_transmittance(discs, *dye, 20.0, 0, 0, kN, kN, kPitch, kPitch, dye_samples, scratch,
                               f.data());
             for (double& c : f)
                 c = 1.0 - c;  // as a covered fraction, like grid_coverage's
@@ -64,16 +100,13 @@ Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullp
             grid_coverage(discs, 0, 0, kN, kN, kPitch, kPitch, scratch, f.data());
         }
         double m = 0.0;
-        for (double c : f) {
-            t_all.push_back(1.0 - c);
-            m += 1.0 - c;
+        for (double& c : f) {
+            c = 1.0 - c;  // transmittance
+            t_all.push_back(c);
+            m += c;
         }
         means.push_back(m / (kN * kN));
-        for (int y = 0; y < kN; ++y)
-            for (int x = 0; x + 1 < kN; ++x) {
-                sxy += (1.0 - f[y * kN + x]) * (1.0 - f[y * kN + x + 1]);
-                ++pairs;
-            }
+        lags.add(f, kN);
     }
     Sample s;
     const double n = static_cast<double>(t_all.size());
@@ -81,7 +114,7 @@ Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullp
         s.mean += t / n;
     for (double t : t_all)
         s.var += (t - s.mean) * (t - s.mean) / (n - 1);
-    s.rho_x = (sxy / pairs - s.mean * s.mean) / s.var;
+    lags.correlations(s.mean, s.var, s.rho_x, s.rho_2x, s.rho_xy);
     // Standard errors: the mean from the spread of the block means (blocks
     // are independent); the variance and the correlation as for n / 2
     // independent pixels (neighbour correlation is small here, checked
@@ -120,7 +153,9 @@ void expect_moments(const Sample& s, const PixelModel::Moments& m, const std::st
 {
     EXPECT_NEAR(s.mean, m.mean, 5 * s.se_mean + 1e-4) << what;
     EXPECT_NEAR(s.var, m.variance, 5 * s.se_var) << what;
-    EXPECT_NEAR(s.rho_x, m.rho_x, 5 * s.se_rho) << what;
+    EXPECT_NEAR(s.rho_x, m.correlation[1], 5 * s.se_rho) << what;
+    EXPECT_NEAR(s.rho_2x, m.correlation[2], 5 * s.se_rho) << what;
+    EXPECT_NEAR(s.rho_xy, m.correlation[kLagSide + 1], 5 * s.se_rho) << what;
 }
 
 TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
@@ -130,7 +165,7 @@ TEST(PixelModel, MomentsMatchTheBooleanModelGrainByGrain)
     for (double v : { 0.05, 0.4, 1.0 }) {
         const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v);
         expect_moments(monte_carlo(pops[0], v), m, "v " + std::to_string(v));
-        EXPECT_LT(m.rho_x, 0.3);  // the n / 2 effective pixels above
+        EXPECT_LT(m.correlation[1], 0.3);  // the n / 2 effective pixels above
         // The table interpolates the direct computation closely.
         const PixelModel table_model(pops, 4.0, 4.0);
         EXPECT_NEAR(table_model.at(v).mean, m.mean, 1e-3 * m.mean);
@@ -190,14 +225,140 @@ TEST(PixelModel, InhibitedMomentsAreThinnedOnes)
     EXPECT_LT(table_model.max_mean_error(), 1e-3);
 }
 
-TEST(PixelModel, MovingAverageTapsHaveTheirCorrelation)
+// Images larger than a pixel (gaussian clouds 9 times the grain, about
+// 3.6 um radius on 4 um pixels): the correlations reach past the
+// neighbours, the model keeps them (to 2 lags or more) and has them
+// against the clouds grain by grain; and the pixel kernel's field has them
+// too, where each pixel's law is near normal (clouds of density 0.02: mean
+// transmittance 0.24, Gamma shape 41) and where it is skewed (density 0.1:
+// mean 0.001, shape 1.4, where normals of the model's correlation would
+// give 0.44 at lag 1 for the model's 0.47: copula_normal_correlation).
+TEST(PixelModel, CorrelationsBeyondTheNeighbours)
 {
-    for (double rho : { 0.0, 0.05, 0.2, 0.5 }) {
-        double t[3];
-        moving_average_taps(rho, t);
-        EXPECT_NEAR(t[0] * t[0] + t[1] * t[1] + t[2] * t[2], 1.0, 1e-12);
-        EXPECT_NEAR(t[0] * t[1] + t[1] * t[2], rho, 1e-12);
+    const TestLayer t;
+    const std::vector<PixelPopulation>& pops = t.pops;
+    for (const double density : { 0.02, 0.1 }) {
+        Layer layer;
+        layer.image                = LayerImage::dye;
+        layer.cloud_profile        = CloudProfile::gaussian;
+        layer.cloud_diameter_ratio = 9.0;
+        layer.cloud_density        = density;
+        const ImageOverlap image(layer);
+        const std::string what      = "cloud density " + std::to_string(density);
+        const double v              = 1.0;
+        const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, image);
+        EXPECT_GT(m.correlation[2], 0.05) << what;  // the lag (2, 0) carries weight
+        if (density == 0.02) {
+            // 8 samples per pixel and axis: 3.6 um clouds vary little over 0.5 um.
+            expect_moments(monte_carlo(pops[0], v, &layer, 1.0, 8), m, what);
+        }
+        const PixelModel model(pops, 4.0, 4.0, image);
+        EXPECT_GE(model.lags(), 2) << what;
+        EXPECT_LE(model.max_dropped_correlation(), PixelModel::kDroppedCorrelation) << what;
+        EXPECT_LT(model.max_copula_error(), 0.01) << what;
+        const PixelModel::Moments at = model.at(v);
+        // 4 fields of 128 x 128 pixels at v.
+        constexpr int kN = 128;
+        const std::vector<double> values(kN * kN, v);
+        LagSums sums;
+        double sum = 0.0, sum2 = 0.0;
+        for (uint64_t key = 1; key <= 4; ++key) {
+            std::vector<double> field(kN * kN);
+            sample_pixel_transmittance(model, key, 0, 0, kN, kN, values.data(), nullptr,
+                                       field.data());
+            for (double x : field) {
+                sum += x;
+                sum2 += x * x;
+            }
+            sums.add(field, kN);
+        }
+        const double n = 4.0 * kN * kN, mean = sum / n, var = sum2 / n - mean * mean;
+        double r10, r20, r11;
+        sums.correlations(mean, var, r10, r20, r11);
+        // Standard error of a correlation of a correlated field: about
+        // sqrt(sum of rho^2 over lags / n) (Bartlett); the model's sum of
+        // rho bounds that sum (rho <= 1).
+        const double se  = std::sqrt(at.correlation_sum / n);
+        const double tol = 5 * se + model.max_copula_error();
+        EXPECT_NEAR(r10, at.correlation[1], tol) << what;
+        EXPECT_NEAR(r20, at.correlation[2], tol) << what;
+        EXPECT_NEAR(r11, at.correlation[kLagSide + 1], tol) << what;
+        EXPECT_NEAR(var, at.variance, 5 * var * std::sqrt(2.0 * at.correlation_sum / n)) << what;
     }
+}
+
+// The normals' correlation that skewed_draw bends into a given one:
+// against draws of correlated normal pairs, in a near-normal and a skewed
+// pixel law.
+TEST(PixelModel, CopulaNormalCorrelationGivesTheDrawsTheirCorrelation)
+{
+    for (const double mean : { 0.3, 0.002 }) {
+        const double variance = mean == 0.3 ? 0.002 : 2.5e-6;  // shapes 45 and 1.6
+        for (const double rho : { 0.1, 0.5, 0.9 }) {
+            const double r = copula_normal_correlation(mean, variance, rho);
+            EXPECT_GE(r, rho);
+            // 200000 pairs of normals with correlation r, through skewed_draw.
+            constexpr int kPairs = 200000;
+            double sa = 0.0, sb = 0.0, saa = 0.0, sbb = 0.0, sab = 0.0;
+            for (int i = 0; i < kPairs; ++i) {
+                const double u1 = (static_cast<double>(counter_u64(hash_ids(5, i), 0) >> 11) + 0.5)
+                                  * 0x1.0p-53;
+                const double u2 = (static_cast<double>(counter_u64(hash_ids(6, i), 0) >> 11) + 0.5)
+                                  * 0x1.0p-53;
+                const double z1 = normal_quantile(u1), z2 = normal_quantile(u2);
+                const double a = skewed_draw(mean, variance, z1);
+                const double b = skewed_draw(mean, variance, r * z1 + std::sqrt(1 - r * r) * z2);
+                sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b;
+            }
+            const double n = kPairs;
+            const double cov = sab / n - sa / n * sb / n;
+            const double corr
+                = cov / std::sqrt((saa / n - sa * sa / (n * n)) * (sbb / n - sb * sb / (n * n)));
+            // Standard error of a correlation: (1 - rho^2) / sqrt(n) for
+            // normals; skewed draws widen it, so 6 of them.
+            EXPECT_NEAR(corr, rho, 6 * (1 - rho * rho) / std::sqrt(n) + 2e-3)
+                << "mean " << mean << " rho " << rho;
+        }
+    }
+}
+
+// The copula's filter has the correlation it is given: Gaussian-shaped
+// correlations of widths up to 1.2 pixels on the lags that hold them (the
+// correlation beyond them below 0.4%), and the 3x3 correlations of a small
+// grain's pixels.
+TEST(PixelModel, CopulaFilterHasItsCorrelation)
+{
+    for (const double width : { 0.3, 0.6, 1.2 }) {
+        const int lags = std::min(kMaxLag, static_cast<int>(std::ceil(3.5 * width)));
+        LagArray rho {}, f {};
+        for (int j = 0; j <= lags; ++j)
+            for (int i = 0; i <= lags; ++i)
+                rho[j * kLagSide + i] = std::exp(-0.5 * (i * i + j * j) / (width * width));
+        const double error = copula_filter(rho, lags, f);
+        EXPECT_LT(error, 0.01) << "width " << width;
+        // The error it reports is the one its taps have.
+        const int support = filter_lags(lags);
+        double sum2 = 0.0, lag1 = 0.0;
+        for (int b = -support; b <= support; ++b)
+            for (int a = -support; a <= support; ++a) {
+                const double t = f[std::abs(b) * kLagSide + std::abs(a)];
+                sum2 += t * t;
+                if (a + 1 <= support)
+                    lag1 += t * f[std::abs(b) * kLagSide + std::abs(a + 1)];
+            }
+        EXPECT_NEAR(sum2, 1.0, 1e-12);
+        EXPECT_NEAR(lag1, rho[1], error + 1e-12) << "width " << width;
+    }
+    LagArray rho {}, f {};
+    rho[0] = 1.0;
+    rho[1] = rho[kLagSide] = 0.2;
+    rho[kLagSide + 1] = 0.04;
+    EXPECT_LT(copula_filter(rho, 1, f), 0.01);
+    // No correlation: the identity.
+    LagArray none {};
+    none[0] = 1.0;
+    EXPECT_LT(copula_filter(none, 2, f), 1e-12);
+    EXPECT_NEAR(f[0], 1.0, 1e-12);
 }
 
 TEST(PixelModel, SamplesAreTileIndependent)
