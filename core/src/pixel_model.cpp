@@ -73,6 +73,15 @@ double coverage_exponent(const std::vector<PixelPopulation>& populations, double
 
 namespace {
 
+/// expm1(x), by its series where |x| < 1e-3 (to 1e-14 relative: x^5 / 120
+/// is the first term left out): most distance nodes of a sparse layer hold
+/// tiny sums, and the table evaluates half a million of them per layer.
+inline double small_expm1(double x)
+{
+    return std::fabs(x) < 1e-3 ? x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0))))
+                               : std::expm1(x);
+}
+
 /// The quadrature and the image overlaps of a layer's populations, prepared once.
 class Integrator {
 public:
@@ -102,12 +111,18 @@ public:
         lag_weights();
     }
 
-    /// Moments at exposure value v, every P times `factor` (MODEL.md 10).
-    PixelModel::Moments operator()(double v, double factor = 1.0) const
-    {
-        PixelModel::Moments m;
-        std::vector<double> g(kDistanceNodes, 0.0);
+    /// The sums over the populations' sizes at exposure value v: the
+    /// coverage exponent sum n E[P b], the developed density sum n E[P] and,
+    /// at each distance node, sum n E[P k(h)]. Every P times a factor (MODEL.md
+    /// 10) scales all three by it, so one set serves every log factor.
+    struct Sums {
         double exponent = 0.0, developed = 0.0;
+        std::vector<double> g;
+    };
+    Sums sums(double v) const
+    {
+        Sums s;
+        s.g.assign(kDistanceNodes, 0.0);
         for (size_t p = 0; p < m_pops.size(); ++p) {
             const PixelPopulation& pp = m_pops[p];
             const Sizes& sz           = m_sizes[p];
@@ -115,15 +130,30 @@ public:
             for (size_t k = 0; k < sz.r_um.size(); ++k) {
                 const double a_um2 = M_PI * sz.r_um[k] * sz.r_um[k];
                 const double pd
-                    = factor * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
+                    = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
                 const double nw = n * sz.w[k] * pd;
-                exponent += nw * m_image.blocking_um2(sz.r_um[k]);
-                developed += nw;
+                s.exponent += nw * m_image.blocking_um2(sz.r_um[k]);
+                s.developed += nw;
                 const double* overlap = &sz.overlap_um2[k * kDistanceNodes];
                 for (int j = 0; j < kDistanceNodes; ++j)
-                    g[static_cast<size_t>(j)] += nw * overlap[j];
+                    s.g[static_cast<size_t>(j)] += nw * overlap[j];
             }
         }
+        return s;
+    }
+
+    /// Moments at exposure value v, every P times `factor` (MODEL.md 10).
+    PixelModel::Moments operator()(double v, double factor = 1.0) const
+    {
+        return moments(sums(v), factor);
+    }
+
+    /// Moments from the sums at some v, every P times `factor`.
+    PixelModel::Moments moments(const Sums& s, double factor) const
+    {
+        PixelModel::Moments m;
+        const double exponent = factor * s.exponent, developed = factor * s.developed;
+        const std::vector<double>& g = s.g;
         m.mean = std::exp(-exponent);
         m.developed_per_pixel = developed * m_px_um * m_py_um;
         // The pixel covariances: C(h) at each distance node against the
@@ -131,7 +161,7 @@ public:
         LagArray cov {};
         double integral = 0.0;
         for (int j = 0; j < kDistanceNodes; ++j) {
-            const double c = m.mean * m.mean * std::expm1(g[static_cast<size_t>(j)]);
+            const double c = m.mean * m.mean * small_expm1(factor * g[static_cast<size_t>(j)]);
             const double* w = &m_lag_weight[static_cast<size_t>(j) * kLagCount];
             for (int lag = 0; lag < kLagCount; ++lag)
                 cov[static_cast<size_t>(lag)] += c * w[lag];
@@ -156,11 +186,11 @@ private:
     ///                            [T_y(h s - j py) + T_y(h s + j py)] dtheta,
     /// the four quadrants of the circle of radius h folded onto the first
     /// (c = cos theta, s = sin theta), by the midpoint rule on 256 angles
-    /// (the integrand is piecewise smooth; at lag 0 below a pixel it agrees
-    /// with the closed form 2 pi h (A - 2 (px + py) h / pi + h^2 / pi) / A^2
-    /// to 1e-5: core PixelModel.LagWeightsAreThePixelOverlaps); and of the
-    /// plane, 2 pi h dh / A (the sum over all lags: the T's of a row of
-    /// pixels sum to the pitch).
+    /// (the integrand is piecewise smooth; at lag 0 below a pixel it
+    /// approximates the closed form 2 pi h (A - 2 (px + py) h / pi + h^2 /
+    /// pi) / A^2); and
+    /// of the plane, 2 pi h dh / A (the sum over all lags: the T's of a row
+    /// of pixels sum to the pitch; core PixelModel.LagsSumToThePlane).
     void lag_weights()
     {
         constexpr int kAngles = 256;
@@ -324,7 +354,7 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
                        double py_um, const ImageOverlap& image, double max_log_factor,
                        int nthreads)
 {
-    const Integrator moments(populations, px_um, py_um, image);
+    const Integrator integrate(populations, px_um, py_um, image);
     const int n   = (kOctavesBelow + kOctavesAbove) * kPerOctave;
     m_log_v0      = std::log(kGrey) - kOctavesBelow * std::log(2.0);
     const double step = std::log(2.0) / kPerOctave;
@@ -344,10 +374,20 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
         parallel_for(static_cast<int64_t>(count), nthreads, stop,
                      [&](int, int64_t k) { body(static_cast<size_t>(k)); });
     };
+    // The sums over sizes once per exposure (node and midpoint), for every
+    // log factor (they scale with it).
+    std::vector<Integrator::Sums> at_node(cols), at_mid(static_cast<size_t>(n));
+    each(cols + static_cast<size_t>(n), [&](size_t k) {
+        if (k < cols)
+            at_node[k] = integrate.sums(node_v(k));
+        else
+            at_mid[k - cols] = integrate.sums(value(static_cast<double>(k - cols) + 0.5));
+    });
     m_rows.assign(static_cast<size_t>(rows), std::vector<Moments>(cols));
     each(rows * cols, [&](size_t k) {
         const size_t r = k / cols, i = k % cols;
-        m_rows[r][i] = moments(node_v(i), factor(static_cast<double>(r) * kLogFactorStep));
+        m_rows[r][i]
+            = integrate.moments(at_node[i], factor(static_cast<double>(r) * kLogFactorStep));
     });
     // Interpolation errors: at exposure midpoints of every row, and at
     // log-factor midpoints of every exposure node.
@@ -358,12 +398,12 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
         Moments exact, interp;
         if (k < v_mid) {
             const size_t r = k / static_cast<size_t>(n), i = k % static_cast<size_t>(n);
-            exact  = moments(value(static_cast<double>(i) + 0.5),
-                             factor(static_cast<double>(r) * kLogFactorStep));
+            exact  = integrate.moments(at_mid[i], factor(static_cast<double>(r) * kLogFactorStep));
             interp = lerp(m_rows[r][i + 1], m_rows[r][i + 2], 0.5);
         } else {
             const size_t r = (k - v_mid) / cols, i = (k - v_mid) % cols;
-            exact  = moments(node_v(i), factor((static_cast<double>(r) + 0.5) * kLogFactorStep));
+            exact  = integrate.moments(at_node[i],
+                                     factor((static_cast<double>(r) + 0.5) * kLogFactorStep));
             interp = lerp(m_rows[r][i], m_rows[r + 1][i], 0.5);
         }
         if (exact.mean > 0.0)

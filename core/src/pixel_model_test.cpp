@@ -287,6 +287,32 @@ TEST(PixelModel, CorrelationsBeyondTheNeighbours)
     }
 }
 
+// The lag weights cover the plane: the correlations summed over every lag
+// the model keeps equal the integral of C over the plane (correlation_sum)
+// when the correlations end within kMaxLag pixels (a row of pixels'
+// overlaps sums to the pitch), for silver discs within one pixel and
+// clouds reaching past two (gaussian clouds of 2 um radius around the
+// mean grain, cut at 3 radii: no overlap beyond 12 um, none at lags 4 and
+// more of 4 um pixels, but for the rare larger grains).
+TEST(PixelModel, LagsSumToThePlane)
+{
+    const TestLayer t;
+    Layer clouds;
+    clouds.image                = LayerImage::dye;
+    clouds.cloud_profile        = CloudProfile::gaussian;
+    clouds.cloud_diameter_ratio = 5.0;
+    clouds.cloud_density        = 0.02;
+    for (const ImageOverlap& image : { ImageOverlap(), ImageOverlap(clouds) }) {
+        const PixelModel::Moments m = PixelModel::compute(t.pops, 4.0, 4.0, 1.0, image);
+        double kept = 0.0;
+        for (int j = 0; j <= kMaxLag; ++j)
+            for (int i = 0; i <= kMaxLag; ++i)
+                kept += (i ? 2.0 : 1.0) * (j ? 2.0 : 1.0) * m.correlation[j * kLagSide + i];
+        EXPECT_NEAR(kept, m.correlation_sum, 1e-4 * m.correlation_sum);
+        EXPECT_GT(m.correlation_sum, 1.0);
+    }
+}
+
 // The normals' correlation that skewed_draw bends into a given one:
 // against draws of correlated normal pairs, in a near-normal and a skewed
 // pixel law.
