@@ -101,6 +101,11 @@ double target_speed_log10_h(const sm::Datasheet& sheet)
 /// model cannot follow (model_limits) is not traded for them.
 constexpr double kCurveMissWeight = 10.0;
 
+/// The weight of a datasheet's characteristic curve in a layer's
+/// objective: its points' mean squared miss counts as this many figures
+/// (the curve is the look; the figures are the rest).
+constexpr double kCurveFigures = 4.0;
+
 /// Squared misses of one layer's figures in tolerance units (D-min aside:
 /// the base absorbs it; only fog above the target D-min counts), speed and
 /// slope near and beyond their tolerance weighted up (kCurveMissWeight).
@@ -128,6 +133,18 @@ double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::Datasheet
         const double fog = l.d_min.value - base_density;
         const double r   = std::max(0.0, fog - *t.d_min) / tol.d_min;
         j += r * r;
+    }
+    // The curve's points above D-min (the base is fitted afterwards, so
+    // net density is what the populations set).
+    if (!t.curve.empty()) {
+        const double d_min = t.d_min ? *t.d_min : t.curve.front().second;
+        double sum = 0.0;
+        for (size_t k = 0; k < t.curve.size(); ++k) {
+            const double r = ((l.curve[k].value - l.d_min.value) - (t.curve[k].second - d_min))
+                             / tol.curve_density;
+            sum += r * r;
+        }
+        j += kCurveFigures * sum / static_cast<double>(t.curve.size());
     }
     return j;
 }
@@ -437,9 +454,13 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
         return Status::errorf("datasheet '", sheet.name, "' gives no speed: the fit needs one");
     Stock s;
     s.name        = sheet.name;
+    bool has_curve = false;
+    for (const sm::LayerTargets& t : sheet.layers)
+        has_curve = has_curve || !t.curve.empty();
     s.description = "Fitted by filmgrain-fit to the published figures of " + sheet.name
-                    + " (speed, slope, D-min, RMS granularity, reciprocity); a model of "
-                      "those figures, not the product.";
+                    + " (speed, slope, D-min, RMS granularity, reciprocity"
+                    + (has_curve ? ", characteristic curve" : "")
+                    + "); a model of those figures, not the product.";
     s.exposure_at_grey_lxs = 10.0 / *sheet.speed;
     s.development_time_s   = options.development_time_s;
     s.development_tau_s    = options.development_tau_s;

@@ -21,6 +21,8 @@
 // stop, 1/6 inside none_between), so 1 is "at tolerance" for one figure;
 // speed and slope misses beyond 0.9 of their tolerance cost 10 times more
 // (held first: a granularity the model cannot follow is not traded for them).
+// A datasheet's characteristic curve (its points above D-min) adds its mean
+// squared miss in units of 0.1 density, weighted as four figures.
 // The result is measured again at the expected curve's full precision.
 #pragma once
 
@@ -45,9 +47,10 @@ struct FitOptions {
     /// Grain populations per layer. [1, 4].
     int populations = 2;
     /// Largest diameter_log_sigma the search may give a population, [0.05,
-    /// 0.8]. Broad sizes put the granularity in a few large grains; below
-    /// 0.5 every grain to z = 4 of a fine emulsion stays under a 4K pixel,
-    /// so the pixel scale renders the stock (the VISION3 fits use 0.5).
+    /// 0.8]. Broad sizes put the granularity in a few large grains, whose
+    /// images correlate pixels further apart: the pixel scale keeps 4
+    /// pixels each way (the VISION3 fits use 0.7 and stay at pixel scale
+    /// in a 4K scan).
     double max_log_sigma = 0.8;
     /// Starts of the population search per layer and round. [1, 16].
     int starts = 2;

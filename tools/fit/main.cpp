@@ -26,7 +26,8 @@ void usage(std::ostream& os)
           "       filmgrain-fit DATASHEET.json --measure STOCK|PRESET [--report DIR]\n"
           "Fits a film stock's grain populations, latent-image rates and base density to\n"
           "the published figures of a datasheet file (speed, slope, D-min, RMS\n"
-          "granularity, reciprocity; format: ../shared/datasheets/README.md), measuring\n"
+          "granularity, reciprocity, characteristic curve points; format:\n"
+          "stocks/datasheets/README.md), measuring\n"
           "every candidate analytically the datasheet way (tools/sensitometry/datasheet.h).\n"
           "  -o FILE            write the fitted stock (JSON, every key) to FILE\n"
           "  --report DIR       write report.md (target vs achieved, every figure),\n"
@@ -62,7 +63,8 @@ void usage(std::ostream& os)
           "  --max-log-sigma X  largest diameter_log_sigma of a population, 0.05 to 0.8\n"
           "                     (default "
        << d.max_log_sigma
-       << "; 0.5 keeps a fine stock at pixel scale in a 4K scan)\n"
+       << "; the VISION3 fits use 0.7 and\n"
+          "                     stay at pixel scale in a 4K scan)\n"
           "  --inhibition, --no-inhibition  search each layer's self-inhibition (MODEL.md\n"
           "                     10, diffusion "
        << d.inhibitor_diffusion_um

@@ -93,7 +93,9 @@ Status parse(const Json& j, Datasheet& d)
         for (size_t i = 0; i < j["layers"].size(); ++i) {
             const Json& l    = j["layers"][i];
             const std::string p = "layers[" + std::to_string(i) + "].";
-            if (Status s = check_keys(l, { "name", "d_min", "slope", "rms_granularity" }, p); !s)
+            if (Status s = check_keys(l, { "name", "d_min", "slope", "rms_granularity", "curve" },
+                                      p);
+                !s)
                 return s;
             LayerTargets t;
             if (!l.contains("name") || !l["name"].is_string())
@@ -152,6 +154,27 @@ Status parse(const Json& j, Datasheet& d)
                               return std::make_pair(!a.net, a.density)
                                      < std::make_pair(!b.net, b.density);
                           });
+            }
+            if (l.contains("curve")) {
+                const Json& c = l["curve"];
+                if (Status s = check_keys(c, { "log_h", "density" }, p + "curve."); !s)
+                    return s;
+                const Json h = c.value("log_h", Json()), dens = c.value("density", Json());
+                if (!h.is_array() || !dens.is_array() || h.size() != dens.size() || h.size() < 2)
+                    return Status::errorf(p, "curve must have arrays log_h and density of one "
+                                             "length, at least 2");
+                for (size_t k = 0; k < h.size(); ++k) {
+                    std::pair<double, double> pt;
+                    const std::string at = "[" + std::to_string(k) + "]";
+                    if (Status s = number(h[k], p + "curve.log_h" + at, pt.first); !s)
+                        return s;
+                    if (Status s = number(dens[k], p + "curve.density" + at, pt.second); !s)
+                        return s;
+                    if (!t.curve.empty() && !(pt.first > t.curve.back().first))
+                        return Status::errorf(p, "curve.log_h must increase (", pt.first,
+                                              " after ", t.curve.back().first, ")");
+                    t.curve.push_back(pt);
+                }
             }
             d.layers.push_back(std::move(t));
         }
@@ -379,14 +402,16 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
         f.name          = t.name;
         f.d_min         = { c.min_density(), c.density_error };
         f.speed_log10_h = { speed_h[l], speed_h_err[l] };
+        const auto d_at = [&](double log10_h) {
+            return c.density_at(std::pow(10.0, log10_h) * sens / lxs_per_value);
+        };
         if (t.slope) {
-            const auto d_at = [&](double log10_h) {
-                return c.density_at(std::pow(10.0, log10_h) * sens / lxs_per_value);
-            };
             const double span = t.slope_log10_h_hi - t.slope_log10_h_lo;
             f.slope = { (d_at(t.slope_log10_h_hi) - d_at(t.slope_log10_h_lo)) / span,
                         2.0 * c.density_error / span };
         }
+        for (const auto& point : t.curve)
+            f.curve.push_back({ d_at(point.first), c.density_error });
         if (options.granularity)
             for (const GranularityTarget& g : t.granularity) {
                 const double density = g.net ? c.min_density() + g.density : g.density;
@@ -466,6 +491,11 @@ double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopMode
         double needed = c.min_density() + crit_net;
         for (const GranularityTarget& g : t.granularity)
             needed = std::max(needed, g.net ? c.min_density() + g.density : g.density);
+        // The curve's points above the datasheet's D-min (the base is
+        // fitted afterwards).
+        for (const auto& point : t.curve)
+            needed = std::max(needed, c.min_density() + point.second
+                                          - (t.d_min ? *t.d_min : t.curve.front().second));
         shortfall = std::max(shortfall, needed - largest);
     }
     return std::max(0.0, shortfall);
@@ -509,6 +539,11 @@ std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetF
                             std::fabs(f.granularity[g].value / gt.rms - 1.0), tol.granularity_rel,
                             "relative" });
         }
+        for (size_t k = 0; k < t.curve.size() && k < f.curve.size(); ++k)
+            out.push_back({ t.name + " D at log H " + fmt(t.curve[k].first), t.curve[k].second,
+                            f.curve[k].value, f.curve[k].error,
+                            std::fabs(f.curve[k].value - t.curve[k].second), tol.curve_density,
+                            "density" });
     }
     const std::vector<double> times = sheet.reciprocity_times_s();
     for (size_t k = 0; k < fig.reciprocity.size() && k < times.size(); ++k) {
