@@ -84,7 +84,7 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 // granularity cannot fall with density as VISION3's does,
 // fit::model_limits, and the fit's compromise misses these) nor the named
 // points of the datasheet's characteristic curve (0.1 density, our
-// tolerance: the toe and the shoulder's last points, by 0.10-0.18); the
+// tolerance: points in the toe and above log H -0.5, by 0.10-0.18); the
 // README and docs/stocks say so.
 TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 {
