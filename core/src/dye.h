@@ -59,8 +59,9 @@ public:
     double overlap_um2(double r_um, double h_um) const;
     /// The distance from which k(r, h) is 0: twice the image's reach.
     double overlap_range_um(double r_um) const;
-    /// The distance beyond which k(r, h) stays below 1e-3 of k(r, 0): what
-    /// the pixel scale's neighbour correlations must cover. Silver and disc
+    /// The distance beyond which k(r, h) stays below 1e-3 of k(r, 0): how
+    /// far one grain's image correlates pixels (the pixel scale's cheap
+    /// check before it tabulates a layer's correlations). Silver and disc
     /// clouds: overlap_range_um (k reaches 0 there); gaussian clouds 2.6
     /// cloud radii when faint (k falls like exp(-(h / R)^2)) to 3.2 at
     /// density 5, well inside their 6-radius overlap range.

@@ -10,7 +10,6 @@
 
 namespace filmgrain {
 
-
 Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
                        int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out)

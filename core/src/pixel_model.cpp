@@ -194,29 +194,31 @@ private:
     void lag_weights()
     {
         constexpr int kAngles = 256;
-        const double px = m_px_um, py = m_py_um, dh = m_dh_um, a = px * py;
-        const auto tri = [](double t, double pitch) { return std::max(0.0, pitch - std::fabs(t)); };
+        const double px_um = m_px_um, py_um = m_py_um, dh_um = m_dh_um, area_um2 = px_um * py_um;
+        const auto tri = [](double t_um, double pitch_um) {
+            return std::max(0.0, pitch_um - std::fabs(t_um));
+        };
         m_lag_weight.assign(static_cast<size_t>(kDistanceNodes) * kLagCount, 0.0);
         m_area_weight.assign(kDistanceNodes, 0.0);
         const double dtheta = 0.5 * M_PI / kAngles;
         for (int n = 0; n < kDistanceNodes; ++n) {
-            const double h = (n + 0.5) * dh;
-            m_area_weight[static_cast<size_t>(n)] = 2.0 * M_PI * h * dh / a;
+            const double h_um = (n + 0.5) * dh_um;
+            m_area_weight[static_cast<size_t>(n)] = 2.0 * M_PI * h_um * dh_um / area_um2;
             double* w = &m_lag_weight[static_cast<size_t>(n) * kLagCount];
             for (int t = 0; t < kAngles; ++t) {
                 const double theta = (t + 0.5) * dtheta;
-                const double hc = h * std::cos(theta), hs = h * std::sin(theta);
+                const double hx_um = h_um * std::cos(theta), hy_um = h_um * std::sin(theta);
                 double tx[kLagSide], ty[kLagSide];
                 for (int i = 0; i < kLagSide; ++i) {
-                    tx[i] = tri(hc - i * px, px) + tri(hc + i * px, px);
-                    ty[i] = tri(hs - i * py, py) + tri(hs + i * py, py);
+                    tx[i] = tri(hx_um - i * px_um, px_um) + tri(hx_um + i * px_um, px_um);
+                    ty[i] = tri(hy_um - i * py_um, py_um) + tri(hy_um + i * py_um, py_um);
                 }
                 for (int j = 0; j < kLagSide; ++j)
                     for (int i = 0; i < kLagSide; ++i)
                         w[j * kLagSide + i] += tx[i] * ty[j];
             }
             for (int lag = 0; lag < kLagCount; ++lag)
-                w[lag] *= h * dh * dtheta / (a * a);
+                w[lag] *= h_um * dh_um * dtheta / (area_um2 * area_um2);
         }
     }
 
@@ -606,7 +608,7 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
                             s += centre[-dy - dx];
                     }
                     noise += t * s;
-                    norm += (a > 0 ? 2.0 : 1.0) * (b > 0 ? 2.0 : 1.0) * t * t;
+                    norm += multiplicity(a) * multiplicity(b) * t * t;
                 }
             transmittance[o]
                 = skewed_draw(d.mean, d.variance, norm > 0.0 ? noise / std::sqrt(norm) : 0.0);

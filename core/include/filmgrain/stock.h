@@ -90,12 +90,12 @@ struct Layer {
     /// For dye: a cloud's peak density. Range (0, 20].
     double cloud_density = 1.0;
 
-    /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
-    /// without spread is rendered exactly as before the keys existed.
     /// The layer's exposure value per unit of a neutral grey (MODEL.md 2:
     /// v = dot(sensitivity, (y, y, y))): the sum of the weights.
     double neutral_weight() const { return sensitivity[0] + sensitivity[1] + sensitivity[2]; }
 
+    /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
+    /// without spread is rendered exactly as before the keys existed.
     bool spreads_light() const
     {
         return (scatter > 0.0 && scatter_sigma_um > 0.0)
