@@ -137,7 +137,7 @@ double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::Datasheet
     // The curve's points above D-min (the base is fitted afterwards, so
     // net density is what the populations set).
     if (!t.curve.empty()) {
-        const double d_min = t.d_min ? *t.d_min : t.curve.front().second;
+        const double d_min = t.curve_d_min();
         double sum = 0.0;
         for (size_t k = 0; k < t.curve.size(); ++k) {
             const double r = ((l.curve[k].value - l.d_min.value) - (t.curve[k].second - d_min))

@@ -494,8 +494,7 @@ double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopMode
         // The curve's points above the datasheet's D-min (the base is
         // fitted afterwards).
         for (const auto& point : t.curve)
-            needed = std::max(needed, c.min_density() + point.second
-                                          - (t.d_min ? *t.d_min : t.curve.front().second));
+            needed = std::max(needed, c.min_density() + point.second - t.curve_d_min());
         shortfall = std::max(shortfall, needed - largest);
     }
     return std::max(0.0, shortfall);

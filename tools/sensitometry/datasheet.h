@@ -69,6 +69,9 @@ struct LayerTargets {
     /// Points of the characteristic curve: (absolute log10 H, lux-seconds;
     /// gross density), increasing log10 H.
     std::vector<std::pair<double, double>> curve;
+    /// The D-min the curve's points stand on (their net densities are
+    /// theirs less it): d_min, else the curve's first point.
+    double curve_d_min() const { return d_min ? *d_min : curve.front().second; }
 };
 
 /// A datasheet file.
