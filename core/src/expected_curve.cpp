@@ -41,47 +41,81 @@ double mean_transmittance(const std::vector<PixelPopulation>& pops, double v,
     return std::exp(-cloud_factor * coverage_exponent(pops, v));
 }
 
-double clamp_density(double transmittance, double base, double max_density)
+/// The smallest transmittance a density clamp of `max_density` lets through.
+double min_transmittance(double max_density)
 {
-    return base - std::log10(std::max(transmittance, std::pow(10.0, -max_density)));
+    return std::pow(10.0, -max_density);
+}
+
+/// base - log10 of the transmittance, clamped at `min_t` (min_transmittance).
+double clamp_density(double transmittance, double base, double min_t)
+{
+    return base - std::log10(std::max(transmittance, min_t));
 }
 
 }  // namespace
 
-double ExpectedCurve::transmittance_at(double value) const
+ExpectedCurveReader::ExpectedCurveReader(const ExpectedCurve& curve)
+    : m_curve(&curve), m_min_transmittance(min_transmittance(curve.max_density))
 {
+    const std::vector<CurvePoint>& points = curve.points;
+    if (points.size() >= 2) {
+        m_log_first = std::log(points[1].value);
+        m_log_last  = std::log(points.back().value);
+    }
+    if (points.size() >= 3)
+        m_log_step = std::log(points[2].value / points[1].value);
+}
+
+double ExpectedCurveReader::transmittance_at(double value) const
+{
+    const std::vector<CurvePoint>& points = m_curve->points;
     if (!(value > 0.0) || points.size() < 2)
         return points.front().transmittance;
     const double lv = std::log(value);
-    if (lv <= std::log(points[1].value))
+    if (lv <= m_log_first)
         return points[1].transmittance;  // as the pixel model: its first node
-    if (lv >= std::log(points.back().value))
+    if (lv >= m_log_last)
         return points.back().transmittance;
-    const double step = std::log(points[2].value / points[1].value);
-    const double t    = (lv - std::log(points[1].value)) / step;
-    const size_t i    = std::min(static_cast<size_t>(t), points.size() - 3);
-    const double f    = t - static_cast<double>(i);
+    const double t = (lv - m_log_first) / m_log_step;
+    const size_t i = std::min(static_cast<size_t>(t), points.size() - 3);
+    const double f = t - static_cast<double>(i);
     return points[i + 1].transmittance
            + f * (points[i + 2].transmittance - points[i + 1].transmittance);
 }
 
+double ExpectedCurveReader::density_at(double value) const
+{
+    return clamp_density(transmittance_at(value), m_curve->base_density, m_min_transmittance);
+}
+
+double ExpectedCurveReader::transmittance_slope_at(double value) const
+{
+    const std::vector<CurvePoint>& points = m_curve->points;
+    if (!(value > 0.0) || points.size() < 3)
+        return 0.0;
+    const double lv = std::log(value);
+    if (lv <= m_log_first || lv >= m_log_last)
+        return 0.0;
+    const size_t i = std::min(static_cast<size_t>((lv - m_log_first) / m_log_step),
+                              points.size() - 3);
+    // T is linear in ln v between points: dT/dv = (dT / d ln v) / v.
+    return (points[i + 2].transmittance - points[i + 1].transmittance) / m_log_step / value;
+}
+
+double ExpectedCurve::transmittance_at(double value) const
+{
+    return ExpectedCurveReader(*this).transmittance_at(value);
+}
+
 double ExpectedCurve::density_at(double value) const
 {
-    return clamp_density(transmittance_at(value), base_density, max_density);
+    return ExpectedCurveReader(*this).density_at(value);
 }
 
 double ExpectedCurve::transmittance_slope_at(double value) const
 {
-    if (!(value > 0.0) || points.size() < 3)
-        return 0.0;
-    const double lv = std::log(value);
-    if (lv <= std::log(points[1].value) || lv >= std::log(points.back().value))
-        return 0.0;
-    const double step = std::log(points[2].value / points[1].value);
-    const size_t i    = std::min(
-        static_cast<size_t>((lv - std::log(points[1].value)) / step), points.size() - 3);
-    // T is linear in ln v between points: dT/dv = (dT / d ln v) / v.
-    return (points[i + 2].transmittance - points[i + 1].transmittance) / step / value;
+    return ExpectedCurveReader(*this).transmittance_slope_at(value);
 }
 
 double ExpectedCurve::gamma_at(double value) const
@@ -190,7 +224,8 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
         c.value         = v;
         c.exposure_lxs  = v * lxs_per_value;
         c.transmittance = mean_transmittance(pops, v, cloud_factor);
-        c.density       = clamp_density(c.transmittance, curve.base_density, stock.max_density);
+        c.density       = clamp_density(c.transmittance, curve.base_density,
+                                        min_transmittance(stock.max_density));
         return c;
     };
     curve.points.push_back(point(0.0));

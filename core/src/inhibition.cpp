@@ -39,26 +39,36 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
     const size_t n = static_cast<size_t>(frame_width * frame_height);
     std::vector<std::vector<double>> blurred(nl);
     std::atomic<bool> stop { false };
+    // Each donor's density above the fog, row by row on every thread. Beyond
+    // the frame the film is unexposed: its density is the fog's. The blur
+    // acts on the density above the fog (0 outside the frame, as
+    // spread_frame takes it), the fog added back after.
+    std::vector<double> fog(nl, 0.0);
+    for (size_t j = 0; j < nl; ++j) {
+        if (!donor[j])
+            continue;
+        fog[j] = curves[j].min_density() - curves[j].base_density;
+        const ExpectedCurveReader curve(curves[j]);
+        std::vector<double>& d = blurred[j];
+        d.resize(n);
+        parallel_for(frame_height, nthreads, stop, [&](int, int64_t y) {
+            double* row = d.data() + y * frame_width;
+            for (int64_t x = 0; x < frame_width; ++x)
+                row[x] = curve.density_at(exposures[j]->value(x, y)) - curves[j].base_density
+                         - fog[j];
+        });
+    }
+    // The blur, one donor per worker.
     parallel_for(static_cast<int64_t>(nl), nthreads, stop, [&](int, int64_t jj) {
         const size_t j = static_cast<size_t>(jj);
         if (!donor[j])
             return;
-        // Beyond the frame the film is unexposed: its density is the fog's.
-        // The blur acts on the density above the fog (0 outside the frame,
-        // as spread_frame takes it), the fog added back after.
-        const double fog = curves[j].min_density() - curves[j].base_density;
-        std::vector<double> d(n);
-        for (int64_t y = 0; y < frame_height; ++y)
-            for (int64_t x = 0; x < frame_width; ++x)
-                d[static_cast<size_t>(y * frame_width + x)]
-                    = curves[j].density_at(exposures[j]->value(x, y)) - curves[j].base_density
-                      - fog;
+        std::vector<double>& d = blurred[j];
         if (stock.inhibitor_diffusion_um > 0.0)
             d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
                              stock.inhibitor_diffusion_um, 0.0, 0.0, HalationKernel::disc);
         for (double& v : d)
-            v += fog;
-        blurred[j] = std::move(d);
+            v += fog[j];
     });
 
     for (size_t k = 0; k < nl; ++k) {
@@ -82,13 +92,16 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         plane->height   = frame_height;
         plane->pitch_um = pitch_um;
         plane->values.resize(n);
-        for (size_t i = 0; i < n; ++i) {
-            double l = 0.0;
-            for (size_t j = 0; j < nl; ++j)
-                if (stock.inhibition[k][j] != 0.0)
-                    l += stock.inhibition[k][j] * blurred[j][i];
-            plane->values[i] = static_cast<float>(std::max(0.0, l));
-        }
+        parallel_for(frame_height, nthreads, stop, [&](int, int64_t y) {
+            for (size_t i = static_cast<size_t>(y * frame_width);
+                 i < static_cast<size_t>((y + 1) * frame_width); ++i) {
+                double l = 0.0;
+                for (size_t j = 0; j < nl; ++j)
+                    if (stock.inhibition[k][j] != 0.0)
+                        l += stock.inhibition[k][j] * blurred[j][i];
+                plane->values[i] = static_cast<float>(std::max(0.0, l));
+            }
+        });
         out.log_factor[k] = std::move(plane);
     }
     return {};

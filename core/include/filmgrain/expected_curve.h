@@ -72,6 +72,26 @@ struct ExpectedCurve {
     double value_at_density(double density) const;
 };
 
+/// One curve read at many values (a frame's pixels): ExpectedCurve's
+/// transmittance_at, density_at and transmittance_slope_at, with the
+/// logarithms of the curve's own points and its density clamp taken once
+/// instead of at every call (the members use it: the same arithmetic, the
+/// same results). Holds a pointer to the curve, which must outlive it and not change.
+class ExpectedCurveReader {
+public:
+    explicit ExpectedCurveReader(const ExpectedCurve& curve);
+    double transmittance_at(double value) const;
+    double density_at(double value) const;
+    double transmittance_slope_at(double value) const;
+
+private:
+    const ExpectedCurve* m_curve;
+    double m_min_transmittance;  ///< 10^-max_density: the density clamp
+    double m_log_first = 0.0;  ///< ln v of the first point above v = 0
+    double m_log_last  = 0.0;  ///< ln v of the last point
+    double m_log_step  = 0.0;  ///< ln v between points (0 with fewer than 3)
+};
+
 /// Options of expected_curves.
 struct ExpectedCurveOptions {
     /// Target standard error of each P(develop | N) node of the tables
