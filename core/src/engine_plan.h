@@ -3,6 +3,7 @@
 // coverage methods run, the tables they use, and the error they add.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -73,10 +74,13 @@ struct LayerPlan {
 
 /// Decides the paths for every layer and builds what they need. `roi` is
 /// the scan region that will be rendered (tables cover the photon counts
-/// the input region under it can produce).
+/// the input region under it can produce). `cancel` (optional), set by
+/// another thread: the plan stops within a table batch, a frame row or
+/// between its steps (a transform of light spread or inhibitor diffusion
+/// takes ~0.5 s at 4K) and returns the error "render cancelled".
 Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                    const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
-                   std::vector<LayerPlan>& out);
+                   std::vector<LayerPlan>& out, const std::atomic<bool>* cancel = nullptr);
 
 /// The input pixel rectangle [x0, x1) x [y0, y1) that a render of `roi`
 /// reads: the ROI's film rectangle grown by `margin_um`, clipped.

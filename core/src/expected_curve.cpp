@@ -176,7 +176,12 @@ const DevelopModel& DevelopModels::get(const Population& pop, double shutter_s)
     o.min_samples           = fog_only ? 32 : o.min_samples;
     o.stream_key            = hash_ids(0xe7c0ffee, m_models.size());
     o.nthreads              = m_options.nthreads;
+    o.cancel                = m_options.cancel;
     m->table = std::make_unique<DevelopTable>(m->rates, shutter_s, m_development, o);
+    if (!m->table->complete()) {  // cancelled (options.cancel): no curve
+        m_models.push_back(std::move(m));
+        return *m_models.back();
+    }
     m->curve = std::make_unique<DevelopCurve>(*m->table, fog_only ? 2 : 4096);
     m->probability_error = fog_only ? 0.0
                                     : 2.0 * m->table->max_standard_error()
@@ -282,7 +287,8 @@ Status expected_curves(const Stock& stock, const SceneSettings& scene,
     // that order).
     for (const Layer& layer : stock.layers)
         for (const Population& pop : layer.populations)
-            models.get(pop, scene.shutter_s);
+            if (!models.get(pop, scene.shutter_s).table->complete())
+                return Status::error("cancelled");
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         const LayerModel model(stock, l, scene, models);
         out.push_back(expected_curve(stock, l, model, options.fog_only));

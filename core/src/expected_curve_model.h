@@ -41,7 +41,9 @@ struct DevelopModel {
 class DevelopModels {
 public:
     DevelopModels(const Stock& stock, const ExpectedCurveOptions& options);
-    /// The table of `pop`'s rates at `shutter_s` (built if new).
+    /// The table of `pop`'s rates at `shutter_s` (built if new). A build
+    /// cancelled (ExpectedCurveOptions::cancel) leaves an incomplete table
+    /// and no curve: check table->complete() before using it.
     const DevelopModel& get(const Population& pop, double shutter_s);
     size_t size() const { return m_models.size(); }
     const Development& development() const { return m_development; }

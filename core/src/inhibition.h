@@ -5,6 +5,7 @@
 // independent given the exposure.
 #pragma once
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -66,9 +67,12 @@ struct InhibitionPlan {
     /// layer without inhibition.
     std::vector<double> max_log_factor;
 };
+/// `cancel` (optional), set by another thread: the plan stops within a
+/// table batch or a frame row and returns the error "render cancelled".
 Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
-                       int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out);
+                       int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out,
+                       const std::atomic<bool>* cancel = nullptr);
 
 /// MODEL.md 10 on a large uniform neutral patch: layer k's log factor
 /// sum_j inhibition[k][j] Dbar_j where layer k has exposure value `value`

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <atomic>
 #include <vector>
 
 #include "development.h"
@@ -45,6 +46,10 @@ public:
         /// full cost, total_steps() of a complete build, exceeds the
         /// budget, whatever the threads.
         uint64_t step_budget = 0;
+        /// Set by another thread (a cancelled render): the build stops
+        /// within a batch of runs and is incomplete(). Not part of what the
+        /// table is (a complete build never saw it set).
+        const std::atomic<bool>* cancel = nullptr;
     };
 
     /// Builds the table. Deterministic for any thread count: each node's
@@ -90,8 +95,8 @@ public:
     uint64_t total_events() const { return m_total_events; }
     /// Chain steps of the build: events plus photon arrivals (its cost).
     uint64_t total_steps() const { return m_total_steps; }
-    /// False when the build ran out of its event budget: then the table
-    /// must not be used (its nodes are unfinished).
+    /// False when the build ran out of its event budget or was cancelled:
+    /// then the table must not be used (its nodes are unfinished).
     bool complete() const { return m_complete; }
 
 private:

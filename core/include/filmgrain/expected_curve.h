@@ -13,6 +13,7 @@
 // D-min, regrain) and by tests.
 #pragma once
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,9 @@ struct ExpectedCurveOptions {
     bool fog_only = false;
     /// Worker threads for the tables (0: all).
     int nthreads = 0;
+    /// Optional: set by another thread to stop the tables' builds;
+    /// expected_curves then returns an error ("cancelled").
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 /// The expected curve of every layer of `stock` (stock order) for the
