@@ -459,7 +459,7 @@ std::vector<std::string> preset_names()
     return names;
 }
 
-const char* default_preset_name() { return "color-negative"; }
+const char* default_preset_name() { return "vision3-500t"; }
 
 std::string preset_json(const std::string& name)
 {

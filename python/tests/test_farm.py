@@ -296,7 +296,9 @@ def test_lost_worker_frames_retried(fg_bin, tmp_path):
     """SIGKILL a worker process while it renders: its frame is rendered again
     on a worker, every frame completes and equals the CLI's; the killed
     worker's CLI process does not live on."""
-    slow = ["--wedge", "--filmgrain:width_mm=3:seed=5", "--frames", "1-4"]
+    # Frames of a few seconds each (the paper-scale stock: the default's
+    # 3 um scan pixels of 50 grains/um^2 a layer would take minutes a frame).
+    slow = ["--wedge", "--filmgrain:stock=color-negative:width_mm=3:seed=5", "--frames", "1-4"]
     out = tmp_path / "farm"
     out.mkdir()
     proc = subprocess.Popen([sys.executable, FARM, "--workers", "2", *slow,

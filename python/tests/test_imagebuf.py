@@ -93,8 +93,10 @@ def test_bad_imagebufs_raise():
 
 def test_progress_reports_and_cancels():
     pixels = scene_pixels()
-    # A render of well over a tenth of a second (a larger frame: more grains).
-    kw = {"seed": 1, "width_mm": 1.0, "engine": "exact"}
+    # A render of well over a tenth of a second (a larger frame: more grains;
+    # the paper-scale stock: the default's 50 grains/um^2 a layer would take
+    # minutes grain by grain).
+    kw = {"stock": "color-negative", "seed": 1, "width_mm": 1.0, "engine": "exact"}
     seen = []
     negative = filmgrain.render(pixels, progress=lambda f: seen.append(f), **kw)
     assert negative.stats["seconds"]["simulate"] > 0.25, "the render is too short to test"

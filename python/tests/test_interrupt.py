@@ -62,8 +62,10 @@ def test_the_gil_is_released_while_rendering():
     result = {}
 
     def work():
-        result["negative"] = filmgrain.render(pixels, width_mm=1.0, engine="exact",
-                                              progress=lambda f: started.set())
+        # The paper-scale stock: a second or two grain by grain (the
+        # default's 50 grains/um^2 a layer would take minutes).
+        result["negative"] = filmgrain.render(pixels, stock="color-negative", width_mm=1.0,
+                                              engine="exact", progress=lambda f: started.set())
 
     thread = threading.Thread(target=work)
     thread.start()

@@ -291,12 +291,22 @@ def test_size_limit_names_the_limit(fg_bin, dirs):
 def test_largest_side_within_limit_is_read(fg_bin, dirs):
     # A 2^20 x 1 image is within every limit: it is read and rendered (the
     # limit is not off by one; a 1-pixel-high 5 mm scan keeps it quick).
+    # color-negative: a stock without development inhibitors.
     indir, outdir = dirs
     src = write_image(indir / "wide.exr", np.full((1, 1 << 20), 0.18, np.float32))
     before = tree_hashes(indir)
-    r = run_measured(fg_bin, src, "--filmgrain:width_mm=5:scan=64x1", "-o", outdir / "o.exr")
+    r = run_measured(fg_bin, src, "--filmgrain:stock=color-negative:width_mm=5:scan=64x1",
+                     "-o", outdir / "o.exr")
     assert r.returncode == 0, r.stderr
     assert tree_hashes(indir) == before
+    # The default stock's inhibitors diffuse 20 um: on 4.8 nm input pixels
+    # that blur reaches ~25000 pixels each way, a transform of 2.7e10
+    # values: refused with the limit and the remedies named, nothing written.
+    r = run_measured(fg_bin, src, "--filmgrain:width_mm=5:scan=64x1", "-o", outdir / "d.exr")
+    assert r.returncode == 1
+    for words in ("above the limit of", "inhibitor_diffusion_um", "coarser input"):
+        assert words in r.stderr, r.stderr
+    assert not (outdir / "d.exr").exists()
 
 
 # ---------------------------------------------------------------------------

@@ -37,7 +37,7 @@ def test_help_lists_every_option_and_modifier_with_default(run):
     for key, line in mods.items():
         assert "Default:" in line, (key, line)
     # The defaults are the library's (SceneSettings, RenderSettings, preset).
-    assert "Default: color-negative." in mods["stock"]
+    assert "Default: vision3-500t." in mods["stock"]
     assert "Default: 0." in mods["exposure"]
     assert "Default: 0.0208333 (1/48)." in mods["shutter"]
     assert "Default: 0." in mods["seed"]
@@ -45,7 +45,7 @@ def test_help_lists_every_option_and_modifier_with_default(run):
     assert "Default: auto." in mods["engine"]
     assert "Default: 64." in mods["tile"]
     # Presets, config resolution order, exit status.
-    assert "color-negative (default), paper" in text
+    assert "vision3-500t (default), vision3-250d" in text
     order = [text.index(s) for s in ("1. --colorconfig", "2. $OCIO", "3. the embedded")]
     assert order == sorted(order)
     assert "Exit status" in text
@@ -74,7 +74,8 @@ def test_version(run):
 def test_list_stocks(run):
     r = run("--list-stocks")
     assert r.returncode == 0, r.stderr
-    assert "color-negative (default)" in r.stdout
+    assert "vision3-500t (default)" in r.stdout
+    assert re.search(r"^color-negative$", r.stdout, re.M)
     assert re.search(r"^paper$", r.stdout, re.M)
     # Each name is followed by its description.
     assert "Stephenson" in r.stdout

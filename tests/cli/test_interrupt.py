@@ -11,10 +11,12 @@ import pytest
 
 from conftest import clean_env, listing
 
-# The wedge over a 6 mm frame on one thread takes several seconds (tens on a
-# slow machine): long enough to be interrupted mid-render. Small tiles keep
-# the cancellation prompt (it is checked between tiles).
-SLOW = ["--wedge", "--filmgrain:width_mm=6:tile=16", "--threads", "1", "--progress"]
+# The wedge of color-negative (paper-scale grains) over a 6 mm frame on one
+# thread takes several seconds (tens on a slow machine): long enough to be
+# interrupted mid-render. Small tiles keep the cancellation prompt (it is
+# checked between tiles).
+SLOW = ["--wedge", "--filmgrain:stock=color-negative:width_mm=6:tile=16", "--threads", "1",
+        "--progress"]
 
 
 def wait_for_progress(proc, timeout=60):

@@ -196,7 +196,7 @@ def test_sigkill_mid_frame_leaves_no_partial_file_and_resumes(fg_bin, dirs):
     nothing else exists (no temporary file either), and --skip-existing
     renders only frame 2."""
     _, outdir = dirs
-    args = [fg_bin, "--wedge", "--frames", "1-2", "--filmgrain:width_mm=4:tile=16",
+    args = [fg_bin, "--wedge", "--frames", "1-2", "--filmgrain:stock=color-negative:width_mm=4:tile=16",
             "--threads", "1", "--progress", "-o", outdir / "w.####.exr",
             "--stats", outdir / "w.####.json", "--skip-existing"]
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
