@@ -354,8 +354,9 @@ PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& popu
 
 PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,
                        double py_um, const ImageOverlap& image, double max_log_factor,
-                       int nthreads)
+                       int nthreads, double max_density)
 {
+    const double floor_t = std::pow(10.0, -max_density);  // the clamp's (0 without)
     const Integrator integrate(populations, px_um, py_um, image);
     const int n   = (kOctavesBelow + kOctavesAbove) * kPerOctave;
     m_log_v0      = std::log(kGrey) - kOctavesBelow * std::log(2.0);
@@ -408,9 +409,11 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
                                      factor((static_cast<double>(r) + 0.5) * kLogFactorStep));
             interp = lerp(m_rows[r][i], m_rows[r + 1][i], 0.5);
         }
-        if (exact.mean > 0.0)
-            mean_error[k] = std::fabs(interp.mean - exact.mean) / exact.mean;
-        if (exact.variance > 0.0)
+        if (exact.mean > 0.0 && interp.mean > 0.0)
+            mean_error[k] = std::fabs(
+                std::log(std::max(interp.mean, floor_t) / std::max(exact.mean, floor_t)));
+        const bool clamped = exact.mean < floor_t && interp.mean < floor_t;
+        if (exact.variance > 0.0 && !clamped)
             sd_error[k] = std::fabs(std::sqrt(interp.variance / exact.variance) - 1.0);
     });
     for (size_t k = 0; k < mean_error.size(); ++k) {

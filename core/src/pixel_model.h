@@ -28,6 +28,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "develop_curve.h"
@@ -126,10 +127,13 @@ public:
     /// The lags kept (lags()) are the fewest that leave at most
     /// kDroppedCorrelation of correlation_sum out at every node. Nodes are
     /// computed on `nthreads` threads (0: all; the table is the same for
-    /// any count).
+    /// any count). `max_density`: the stock's clamp of -log10 T (MODEL.md
+    /// 5); the interpolation errors count only where it does not clamp
+    /// (the table itself is the same whatever it is).
     PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um,
                const ImageOverlap& image = ImageOverlap(), double max_log_factor = 0.0,
-               int nthreads = 1);
+               int nthreads = 1,
+               double max_density = std::numeric_limits<double>::infinity());
 
     /// Step of the log-factor axis: the thinning exp(-L) is interpolated
     /// linearly between nodes 0.05 apart (relative error <= 3e-4, measured
@@ -171,7 +175,10 @@ public:
 
     /// Largest relative error of the table's interpolation found at node
     /// midpoints (in v, and in L at every v node), in the mean and in the
-    /// standard deviation.
+    /// standard deviation; the mean's as |ln| of the ratio of the two means,
+    /// each first raised to the density clamp's floor 10^-max_density (a
+    /// mean below it is drawn as clamped pixels: its error does not show),
+    /// and midpoints where both lie below the floor count no sd error.
     double max_mean_error() const { return m_max_mean_error; }
     double max_sd_error() const { return m_max_sd_error; }
 

@@ -225,6 +225,24 @@ TEST(PixelModel, InhibitedMomentsAreThinnedOnes)
     EXPECT_LT(table_model.max_mean_error(), 1e-3);
 }
 
+// The table's interpolation errors count where the density clamp lets the
+// mean through (MODEL.md 5: -log10 T at most max_density): the table is
+// the same whatever the clamp; a clamp at 0 (floor 1) hides every error; a
+// clamp at density 1 hides the errors of the darker nodes only.
+TEST(PixelModel, InterpolationErrorsCountAboveTheDensityClamp)
+{
+    const TestLayer t;
+    const PixelModel plain(t.pops, 4.0, 4.0, ImageOverlap(), 1.0, 1);
+    const PixelModel at_one(t.pops, 4.0, 4.0, ImageOverlap(), 1.0, 1, 1.0);
+    const PixelModel at_zero(t.pops, 4.0, 4.0, ImageOverlap(), 1.0, 1, 0.0);
+    for (double v : { 0.0, 0.01, 0.3, 1.0, 7.0 })
+        EXPECT_EQ(plain.at(v, 0.4).mean, at_one.at(v, 0.4).mean) << v;
+    EXPECT_GT(plain.max_mean_error(), 0.0);
+    EXPECT_LE(at_one.max_mean_error(), plain.max_mean_error());
+    EXPECT_EQ(at_zero.max_mean_error(), 0.0);
+    EXPECT_EQ(at_zero.max_sd_error(), 0.0);
+}
+
 // Images larger than a pixel (gaussian clouds 9 times the grain, about
 // 3.6 um radius on 4 um pixels): the correlations reach past the
 // neighbours, the model keeps them (to 2 lags or more) and has them
