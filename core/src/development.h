@@ -31,6 +31,10 @@ public:
     /// develops(n4, u) == (n4 >= n4_needed(u)) for every n4 (survival falls
     /// with n4). UINT64_MAX when no n4 suffices (d = 0 and u below 1 - f).
     uint64_t n4_needed(double u) const;
+    /// t / fog_tau and t / development_tau: all that the probabilities
+    /// above depend on (a key for what is built from them).
+    double fog_exponent() const { return m_fog_exponent; }
+    double dev_exponent() const { return m_dev_exponent; }
 
 private:
     double m_fog_exponent = 0.0;  ///< t / fog_tau

@@ -6,9 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <sstream>
-#include <tuple>
 
 #include "dye.h"
 #include "inhibition.h"
@@ -157,43 +155,6 @@ double table_density_error(const Population& pop, const DevelopTable& table,
         worst = std::max(worst, kLog10E * pop.grains_per_um2 * (2.0 * std::sqrt(var) + interp));
     }
     return worst;
-}
-
-/// Tables built in this process, by everything that determines their
-/// contents (rates, shutter, development, build options: the thread count
-/// does not change a table). A render with the same key gets the same table
-/// whether it is built or found, so results never depend on call history;
-/// frames of a sequence share it. Bounded: the oldest entries go first.
-std::shared_ptr<const DevelopTable> cached_table(const KineticsRates& rates, double shutter_s,
-                                                const Stock& stock,
-                                                const DevelopTable::Options& options)
-{
-    using Key = std::tuple<double, double, double, double, double, double, double, uint64_t,
-                           double, int, int, uint64_t, double, uint64_t, double, uint64_t>;
-    const Key key { rates.k_pair_per_s,        rates.k_join_per_s,   rates.k_loss_per_s,
-                    shutter_s,                 stock.development_time_s,
-                    stock.development_tau_s,   stock.fog_tau_s,      options.max_photons,
-                    options.target_standard_error, options.min_samples, options.max_samples,
-                    options.dense_photons,     options.node_ratio,   options.coarse_photons,
-                    options.coarse_ratio,      options.stream_key };
-    static std::mutex mutex;
-    static std::vector<std::pair<Key, std::shared_ptr<const DevelopTable>>> cache;
-    {
-        std::lock_guard<std::mutex> lock(mutex);
-        for (const auto& [k, t] : cache)
-            if (k == key)
-                return t;
-    }
-    auto table = std::make_shared<const DevelopTable>(rates, shutter_s, Development(stock),
-                                                      options);
-    if (!table->complete())
-        return table;  // over its budget: unfinished, never cached
-    std::lock_guard<std::mutex> lock(mutex);
-    constexpr size_t kEntries = 16;
-    if (cache.size() >= kEntries)
-        cache.erase(cache.begin());
-    cache.emplace_back(key, table);
-    return table;
 }
 
 /// How auto shares its density error budget (tolerance): the tables (and
@@ -487,8 +448,10 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             // 0.434 n E[a] e; nodes' errors partly average (estimated below).
             const double target = std::max(fast ? 5e-3 : 0.0, kTableShare * settings.tolerance
                                                                   / (kLog10E * n_mean_area));
-            // Rounded up to a power of two so that frames of a sequence
-            // share one table (see cached_table).
+            // Rounded up to a power of two so that renders of one seed
+            // share one table (see shared_develop_table; a frame's grain
+            // seed keys its table: frame_seed(seed, frame) renders as the
+            // single image of that seed).
             uint64_t n_max = 64;
             while (n_max < n_need && n_max < kTablePhotonCap)
                 n_max *= 2;
@@ -543,7 +506,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             if (!forced_table)
                 req.options.step_budget
                     = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
-            req.table = cached_table(req.rates, scene.shutter_s, stock, req.options);
+            req.table = shared_develop_table(req.rates, scene.shutter_s, development, req.options);
         }
         // Setup time: the pilot, and the build when there is one.
         req.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -709,7 +672,8 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
         auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
                                                         frame.scan_pitch_y_um, image,
-                                                        max_log_factor, settings.nthreads);
+                                                        max_log_factor, settings.nthreads,
+                                                        stock.max_density);
         plan.setup_seconds
             += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (cancelled())

@@ -177,7 +177,7 @@ const DevelopModel& DevelopModels::get(const Population& pop, double shutter_s)
     o.stream_key            = hash_ids(0xe7c0ffee, m_models.size());
     o.nthreads              = m_options.nthreads;
     o.cancel                = m_options.cancel;
-    m->table = std::make_unique<DevelopTable>(m->rates, shutter_s, m_development, o);
+    m->table = shared_develop_table(m->rates, shutter_s, m_development, o);
     if (!m->table->complete()) {  // cancelled (options.cancel): no curve
         m_models.push_back(std::move(m));
         return *m_models.back();

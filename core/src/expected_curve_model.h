@@ -24,7 +24,7 @@ namespace filmgrain {
 struct DevelopModel {
     KineticsRates rates;
     double shutter_s = 0.0;
-    std::unique_ptr<DevelopTable> table;
+    std::shared_ptr<const DevelopTable> table;  ///< shared_develop_table's
     std::unique_ptr<DevelopCurve> curve;
     /// Bound on the error of P read from it: 2 standard errors of the
     /// table's nodes plus the table's and the curve's interpolation (0 for

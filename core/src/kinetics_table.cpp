@@ -4,6 +4,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <mutex>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "parallel.h"
 #include "rng.h"
@@ -209,6 +213,36 @@ double DevelopTable::interpolate(uint64_t n) const
     const double n0 = static_cast<double>(m_nodes_n[i - 1]), n1 = static_cast<double>(m_nodes_n[i]);
     const double t  = (static_cast<double>(n) - n0) / (n1 - n0);
     return m_nodes_p[i - 1] + t * (m_nodes_p[i] - m_nodes_p[i - 1]);
+}
+
+std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& rates,
+                                                         double shutter_s, const Development& dev,
+                                                         const DevelopTable::Options& options)
+{
+    using Key = std::tuple<double, double, double, double, double, double, uint64_t, double, int,
+                           int, uint64_t, double, uint64_t, double, uint64_t>;
+    const Key key { rates.k_pair_per_s,   rates.k_join_per_s,           rates.k_loss_per_s,
+                    shutter_s,            dev.fog_exponent(),           dev.dev_exponent(),
+                    options.max_photons,  options.target_standard_error, options.min_samples,
+                    options.max_samples,  options.dense_photons,        options.node_ratio,
+                    options.coarse_photons, options.coarse_ratio,       options.stream_key };
+    static std::mutex mutex;
+    static std::vector<std::pair<Key, std::shared_ptr<const DevelopTable>>> cache;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& [k, t] : cache)
+            if (k == key)
+                return t;
+    }
+    auto table = std::make_shared<const DevelopTable>(rates, shutter_s, dev, options);
+    if (!table->complete())
+        return table;  // over its budget or cancelled: unfinished, never kept
+    std::lock_guard<std::mutex> lock(mutex);
+    constexpr size_t kEntries = 16;
+    if (cache.size() >= kEntries)
+        cache.erase(cache.begin());
+    cache.emplace_back(key, table);
+    return table;
 }
 
 }  // namespace filmgrain

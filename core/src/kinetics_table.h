@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <atomic>
+#include <memory>
 #include <vector>
 
 #include "development.h"
@@ -110,5 +111,17 @@ private:
     uint64_t m_total_runs = 0, m_total_events = 0, m_total_steps = 0;
     bool m_complete = true;
 };
+
+/// The table of these rates, shutter, development and options, built once
+/// per process: tables built earlier (by any render, expected curve or
+/// fit) with the same key are returned, not rebuilt. The key is everything
+/// that determines a table's contents (the thread count and the cancel
+/// flag do not), so a table is the same whether built or found and results
+/// never depend on call history. Incomplete builds (over their step budget,
+/// or cancelled) are returned but never kept. Bounded: the oldest of 16
+/// entries goes first. Thread safe.
+std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& rates,
+                                                         double shutter_s, const Development& dev,
+                                                         const DevelopTable::Options& options);
 
 }  // namespace filmgrain
