@@ -249,7 +249,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                    std::vector<LayerPlan>& out, const std::atomic<bool>* cancel)
 {
     out.clear();
-    const auto cancelled = [cancel] { return cancel && *cancel; };
+    const auto cancelled = [cancel] { return cancel_requested(cancel); };
     const double lxs_per_value
         = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
     const bool exact = settings.engine == Engine::exact;

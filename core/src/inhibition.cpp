@@ -15,7 +15,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out,
                        const std::atomic<bool>* cancel)
 {
-    const auto cancelled = [cancel] { return cancel && *cancel; };
+    const auto cancelled = [cancel] { return cancel_requested(cancel); };
     out = InhibitionPlan {};
     const size_t nl = stock.layers.size();
     out.log_factor.assign(nl, nullptr);

@@ -55,7 +55,7 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
     const int batch = std::max(32, static_cast<int>(std::min<uint64_t>(
                                        o.min_samples, o.min_samples * uint64_t(256) / n)));
     for (int done = 0; done < o.max_samples;) {
-        if (budget.exceeded || (o.cancel && *o.cancel))
+        if (budget.exceeded || cancel_requested(o.cancel))
             return r;
         const uint64_t events_before = r.events;
         const int done_before        = done;
@@ -147,7 +147,7 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
     budget.limit = options.step_budget;
     std::atomic<bool> stop { false };
     const int64_t n = static_cast<int64_t>(m_nodes_n.size());
-    const auto cancelled = [&] { return options.cancel && *options.cancel; };
+    const auto cancelled = [&] { return cancel_requested(options.cancel); };
     parallel_for(n, options.nthreads, stop, [&](int, int64_t k) {
         if (budget.exceeded || cancelled())
             return;

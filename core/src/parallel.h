@@ -25,6 +25,10 @@ int64_t parallel_for(int64_t n, int nthreads, std::atomic<bool>& stop,
                      const std::function<void(int worker, int64_t i)>& body,
                      const std::function<void(int64_t done)>& poll = {});
 
+/// Whether an optional cancel flag (set by another thread: a cancelled
+/// render's planning) is set.
+inline bool cancel_requested(const std::atomic<bool>* cancel) { return cancel && *cancel; }
+
 /// Workers parallel_for(n, nthreads, ...) uses: the worker indices it
 /// passes are below this.
 int parallel_workers(int64_t n, int nthreads);

@@ -7,11 +7,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <exception>
 #include <limits>
-#include <mutex>
-#include <thread>
 
 #include "development.h"
 #include "dye.h"
@@ -711,44 +708,28 @@ Status validate_request(const Stock& stock, const SceneSettings& scene, const Im
 }
 
 /// plan_layers, stoppable. Without a progress callback it runs here. With
-/// one it runs on a thread of its own while this thread (the caller's, as
-/// ProgressCallback promises) reports 0 about every 100 ms and cancels the
-/// plan when told to: its tables, inhibitor blur and light spread take
-/// seconds on a 4K frame of a fine-grained stock.
+/// one it runs as the one item of a polled parallel_for: a worker plans
+/// while this thread (the caller's, as ProgressCallback promises) reports 0
+/// about every 100 ms and cancels the plan when told to: its tables,
+/// inhibitor blur and light spread take seconds on a 4K frame of a
+/// fine-grained stock.
 Status plan_stoppably(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                       const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
                       std::vector<LayerPlan>& plan)
 {
     if (!settings.progress)
         return plan_layers(stock, scene, input, frame, roi, settings, plan);
-    std::atomic<bool> cancel { false };
-    std::mutex mutex;
-    std::condition_variable finished;
-    bool done = false;
+    std::atomic<bool> cancel { false }, stop { false };
     Status status;
-    std::exception_ptr error;
-    std::thread planner([&] {
-        try {
+    parallel_for(
+        1, 1, stop,
+        [&](int, int64_t) {
             status = plan_layers(stock, scene, input, frame, roi, settings, plan, &cancel);
-        } catch (...) {
-            error = std::current_exception();
-        }
-        std::lock_guard<std::mutex> lock(mutex);
-        done = true;
-        finished.notify_one();
-    });
-    {
-        std::unique_lock<std::mutex> lock(mutex);
-        while (!finished.wait_for(lock, std::chrono::milliseconds(100), [&] { return done; })) {
-            lock.unlock();
+        },
+        [&](int64_t) {
             if (!cancel && !settings.progress(0.0))
                 cancel = true;
-            lock.lock();
-        }
-    }
-    planner.join();
-    if (error)
-        std::rethrow_exception(error);
+        });
     if (cancel)
         return Status::error("render cancelled");
     return status;
