@@ -67,7 +67,10 @@ void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, i
 struct RasterScratch {
     std::vector<uint64_t> bits;
     std::vector<int> count;
-    std::vector<int64_t> span;
+    std::vector<double> span;
+    /// Use the portable build even where the processor has AVX2 (for the
+    /// test that both give the same bits).
+    bool portable = false;
 };
 
 /// Covered fraction of each pixel of the block [x0, x1) x [y0, y1) of a
