@@ -68,8 +68,9 @@ struct RasterScratch {
     std::vector<uint64_t> bits;
     std::vector<int> count;
     std::vector<double> span;
-    /// Use the portable build even where the processor has AVX2 (for the
-    /// test that both give the same bits).
+    /// Use the portable builds even where the processor has AVX2 or
+    /// AVX-512 popcounts (for the test that every build gives the same
+    /// fractions).
     bool portable = false;
 };
 
