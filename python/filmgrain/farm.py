@@ -650,9 +650,9 @@ def render_tiled(farm, a, fg_bin, con, nworkers, job, t0):
         roi = (rx, ry, rw, rh) if user_roi is not None else (
             probe.full_x, probe.full_y, probe.full_width, probe.full_height)
         strips = _strips(roi, a.tiles)
-        # Tiles are written losslessly (zip); the user's compression (maybe
+        # Tiles are written losslessly (piz); the user's compression (maybe
         # lossy) is applied once, to the stitched pixels, as a whole render.
-        tiles = [task_args(f"tile{i:04d}", s, "zip") for i, s in enumerate(strips)]
+        tiles = [task_args(f"tile{i:04d}", s, "piz") for i, s in enumerate(strips)]
         label = f"frame {frame} " if frame is not None else ""
         farm.run([(f"{label}tile {i} (rows {s[1]}-{s[1] + s[3] - 1})", argv)
                   for i, ((argv, _), s) in enumerate(zip(tiles, strips))], "tiles")
