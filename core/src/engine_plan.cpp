@@ -448,10 +448,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             // 0.434 n E[a] e; nodes' errors partly average (estimated below).
             const double target = std::max(fast ? 5e-3 : 0.0, kTableShare * settings.tolerance
                                                                   / (kLog10E * n_mean_area));
-            // Rounded up to a power of two so that renders of one seed
-            // share one table (see shared_develop_table; a frame's grain
-            // seed keys its table: frame_seed(seed, frame) renders as the
-            // single image of that seed).
+            // Rounded up to a power of two so that renders share tables
+            // (shared_develop_table). The table's stream is the same for
+            // every seed and frame (keyed by the rates' order only): a
+            // sequence's frames (and any seed) share one table, so the
+            // table's own error is the same on every frame (no flicker of
+            // mean density from frame to frame) and is paid once per
+            // process; frame_seed(seed, frame) still renders as the single
+            // image of that seed.
             uint64_t n_max = 64;
             while (n_max < n_need && n_max < kTablePhotonCap)
                 n_max *= 2;
@@ -466,7 +470,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                 req.rates                         = pp.rates;
                 req.options.max_photons           = n_max;
                 req.options.target_standard_error = target;
-                req.options.stream_key            = hash_ids(grain_seed(scene), 0x7ab1e, r);
+                req.options.stream_key            = hash_ids(0x7ab1e, r);
                 req.options.nthreads              = settings.nthreads;
                 req.options.cancel                = cancel;
                 req.grain_steps                   = steps;
