@@ -580,13 +580,15 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
     // keyed by its absolute pixel.
     const int64_t zw = tw + 2 * k;
     std::vector<double> z(static_cast<size_t>(zw * (th + 2 * k)));
+    std::vector<double> u(z.size());
     for (int64_t j = 0; j < th + 2 * k; ++j)
         for (int64_t i = 0; i < zw; ++i) {
             const uint64_t id = hash_ids(key, static_cast<uint64_t>(x0 + i - k),
                                          static_cast<uint64_t>(y0 + j - k));
-            const double u = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
-            z[static_cast<size_t>(j * zw + i)] = normal_quantile(u);
+            u[static_cast<size_t>(j * zw + i)]
+                = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
         }
+    normal_quantiles(u.data(), z.data(), z.size());
     PixelModel::Draw d;
     for (int64_t j = 0; j < th; ++j)
         for (int64_t i = 0; i < tw; ++i) {

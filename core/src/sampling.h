@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "rng.h"
@@ -21,6 +22,10 @@ double normal_upper_tail(double z);
 /// Inverse standard normal CDF, Wichura's AS241 (PPND16): relative error
 /// about 1e-16 for p in (0, 1). p <= 0 gives -inf, p >= 1 gives +inf.
 double normal_quantile(double p);
+
+/// normal_quantile of each of p[0..n) into z[0..n), the same values, in a
+/// loop that vectorises where p is central (about 85% of uniforms).
+void normal_quantiles(const double* p, double* z, size_t n);
 
 /// A standard normal z restricted to (z_lo, z_hi], drawn by inverting the
 /// CDF at uniform u in [0, 1). z_lo may be -inf. Accurate in the upper tail

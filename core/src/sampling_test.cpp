@@ -23,6 +23,23 @@ TEST(Sampling, NormalQuantileInvertsTheCdf)
     EXPECT_TRUE(std::isinf(normal_quantile(1.0)));
 }
 
+TEST(Sampling, BatchQuantilesEqualTheScalarOnes)
+{
+    // normal_quantiles against normal_quantile, bit for bit: both regions,
+    // the boundaries between them, and the limits.
+    std::vector<double> p { 0.0, 1.0, 0.075, 0.925, std::nextafter(0.075, 0.0),
+                            std::nextafter(0.925, 1.0), 1e-300, 0.5, 1 - 1e-16, std::nan("") };
+    for (int i = 0; i < 20000; ++i)
+        p.push_back((i + 0.5) / 20000.0);
+    std::vector<double> z(p.size());
+    normal_quantiles(p.data(), z.data(), p.size());
+    for (size_t i = 0; i < p.size(); ++i) {
+        const double want = normal_quantile(p[i]);
+        EXPECT_TRUE(z[i] == want || (std::isnan(z[i]) && std::isnan(want)))
+            << "p = " << p[i] << ": " << z[i] << " against " << want;
+    }
+}
+
 TEST(Sampling, UpperTailIsAccurate)
 {
     EXPECT_NEAR(normal_upper_tail(9.0) / 1.1285884059538408e-19, 1.0, 1e-12);
