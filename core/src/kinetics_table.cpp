@@ -4,10 +4,21 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
 #include <mutex>
+#include <sstream>
+#include <thread>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include "parallel.h"
 #include "rng.h"
@@ -186,6 +197,128 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
     }
 }
 
+namespace {
+
+/// Plain values appended to / read from a byte string (this machine's
+/// representation: a cache file is read where it was written, and its
+/// code id names the build).
+struct Bytes {
+    std::string data;
+    size_t at = 0;
+    bool ok   = true;
+    template<typename T> void put(const T& v)
+    {
+        static_assert(std::is_trivially_copyable_v<T>);
+        data.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    template<typename T> void put(const std::vector<T>& v)
+    {
+        put(static_cast<uint64_t>(v.size()));
+        for (const T& x : v)
+            put(x);
+    }
+    template<typename T> T get()
+    {
+        T v {};
+        if (!ok || data.size() - at < sizeof v) {
+            ok = false;
+            return v;
+        }
+        std::memcpy(&v, data.data() + at, sizeof v);
+        at += sizeof v;
+        return v;
+    }
+    template<typename T> std::vector<T> get_vector()
+    {
+        const uint64_t n = get<uint64_t>();
+        if (!ok || n > (data.size() - at) / sizeof(T)) {
+            ok = false;
+            return {};
+        }
+        std::vector<T> v(static_cast<size_t>(n));
+        for (T& x : v)
+            x = get<T>();
+        return v;
+    }
+};
+
+/// What of the options decides a table's contents (not threads, budget or
+/// the cancel flag), in a fixed order.
+void put_options(Bytes& b, const DevelopTable::Options& o)
+{
+    b.put(o.max_photons);
+    b.put(o.target_standard_error);
+    b.put(o.min_samples);
+    b.put(o.max_samples);
+    b.put(o.dense_photons);
+    b.put(o.node_ratio);
+    b.put(o.coarse_photons);
+    b.put(o.coarse_ratio);
+    b.put(o.stream_key);
+}
+
+}  // namespace
+
+std::string DevelopTable::serialize() const
+{
+    Bytes b;
+    put_options(b, m_options);
+    b.put(m_nodes_n);
+    b.put(m_nodes_p);
+    b.put(m_nodes_se);
+    b.put(m_max_p);
+    b.put(m_min_p);
+    b.put(m_max_se);
+    b.put(m_max_interp);
+    b.put(m_total_runs);
+    b.put(m_total_events);
+    b.put(m_total_steps);
+    b.put(static_cast<uint8_t>(m_complete));
+    return std::move(b.data);
+}
+
+std::shared_ptr<const DevelopTable> DevelopTable::deserialize(const std::string& bytes,
+                                                              const Options& options)
+{
+    Bytes want;
+    put_options(want, options);
+    if (bytes.compare(0, want.data.size(), want.data) != 0)
+        return nullptr;
+    Bytes b { bytes, want.data.size() };
+    std::shared_ptr<DevelopTable> t(new DevelopTable());
+    t->m_options      = options;
+    t->m_nodes_n      = b.get_vector<uint64_t>();
+    t->m_nodes_p      = b.get_vector<double>();
+    t->m_nodes_se     = b.get_vector<double>();
+    t->m_max_p        = b.get<double>();
+    t->m_min_p        = b.get<double>();
+    t->m_max_se       = b.get<double>();
+    t->m_max_interp   = b.get<double>();
+    t->m_total_runs   = b.get<uint64_t>();
+    t->m_total_events = b.get<uint64_t>();
+    t->m_total_steps  = b.get<uint64_t>();
+    t->m_complete     = b.get<uint8_t>() == 1;
+    // Whole, complete, and the nodes these options place.
+    if (!b.ok || b.at != bytes.size() || !t->m_complete || t->m_nodes_n != node_photons(options)
+        || t->m_nodes_p.size() != t->m_nodes_n.size()
+        || t->m_nodes_se.size() != t->m_nodes_n.size())
+        return nullptr;
+    return t;
+}
+
+std::string table_cache_dir()
+{
+#ifdef FILMGRAIN_TABLE_CODE_ID
+    if (const char* dir = std::getenv("FILMGRAIN_CACHE_DIR"))
+        return std::string(dir) == "off" ? std::string() : std::string(dir);
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg == '/')
+        return std::string(xdg) + "/filmgrain";
+    if (const char* home = std::getenv("HOME"); home && *home)
+        return std::string(home) + "/.cache/filmgrain";
+#endif
+    return {};
+}
+
 bool DevelopTable::is_node(uint64_t n) const
 {
     return std::binary_search(m_nodes_n.begin(), m_nodes_n.end(), n);
@@ -215,6 +348,122 @@ double DevelopTable::interpolate(uint64_t n) const
     return m_nodes_p[i - 1] + t * (m_nodes_p[i] - m_nodes_p[i - 1]);
 }
 
+namespace {
+
+#ifdef FILMGRAIN_TABLE_CODE_ID
+constexpr char kTableFileMagic[] = "filmgrain P(develop|N) table 1";
+
+/// The first bytes of a table's cache file: the format, the build's table
+/// code id, and what of the key is not in the table's own bytes.
+std::string table_file_header(const KineticsRates& rates, double shutter_s,
+                              const Development& dev)
+{
+    Bytes b;
+    b.data = std::string(kTableFileMagic) + '\n' + FILMGRAIN_TABLE_CODE_ID + '\n';
+    b.put(rates.k_pair_per_s);
+    b.put(rates.k_join_per_s);
+    b.put(rates.k_loss_per_s);
+    b.put(shutter_s);
+    b.put(dev.fog_exponent());
+    b.put(dev.dev_exponent());
+    return std::move(b.data);
+}
+
+/// FNV-1a over the bytes: a cache file's check (not a defence against
+/// anyone, a guard against a damaged file).
+uint64_t content_hash(const std::string& bytes)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (unsigned char c : bytes)
+        h = (h ^ c) * 0x100000001b3ull;
+    return h;
+}
+
+/// The cache file of a table: named by a hash of its header and options
+/// (a collision only costs a rebuild: the file's bytes are compared).
+std::filesystem::path table_file(const std::string& dir, const std::string& header,
+                                 const DevelopTable::Options& options)
+{
+    Bytes b;
+    put_options(b, options);
+    const size_t h = std::hash<std::string>()(header + b.data);
+    std::ostringstream name;
+    name << "table-" << std::hex << h << ".bin";
+    return std::filesystem::path(dir) / "tables" / name.str();
+}
+#endif
+
+std::shared_ptr<const DevelopTable> read_cached_table(const KineticsRates& rates,
+                                                      double shutter_s, const Development& dev,
+                                                      const DevelopTable::Options& options)
+{
+#ifdef FILMGRAIN_TABLE_CODE_ID
+    const std::string dir = table_cache_dir();
+    if (dir.empty())
+        return nullptr;
+    const std::string header = table_file_header(rates, shutter_s, dev);
+    std::ifstream in(table_file(dir, header, options), std::ios::binary);
+    if (!in)
+        return nullptr;
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // Header, table, and a hash of both (a damaged file is not read).
+    if (bytes.size() < header.size() + sizeof(uint64_t)
+        || bytes.compare(0, header.size(), header) != 0)
+        return nullptr;
+    const size_t body = bytes.size() - sizeof(uint64_t);
+    uint64_t check    = 0;
+    std::memcpy(&check, bytes.data() + body, sizeof check);
+    if (check != content_hash(bytes.substr(0, body)))
+        return nullptr;
+    return DevelopTable::deserialize(bytes.substr(header.size(), body - header.size()), options);
+#else
+    (void)rates, (void)shutter_s, (void)dev, (void)options;
+    return nullptr;
+#endif
+}
+
+void write_cached_table(const KineticsRates& rates, double shutter_s, const Development& dev,
+                        const DevelopTable& table)
+{
+#ifdef FILMGRAIN_TABLE_CODE_ID
+    const std::string dir = table_cache_dir();
+    if (dir.empty())
+        return;
+    // Best effort: a cache that cannot be written only costs the next
+    // process a build. Written to a temporary file of its own (process and
+    // thread), renamed into place whole.
+    std::error_code ec;
+    const std::string header    = table_file_header(rates, shutter_s, dev);
+    const std::filesystem::path path = table_file(dir, header, table.options());
+    std::filesystem::create_directories(path.parent_path(), ec);
+    if (ec)
+        return;
+    std::ostringstream tmp_name;
+    tmp_name << path.filename().string() << ".tmp-" << ::getpid() << "-"
+             << std::hash<std::thread::id>()(std::this_thread::get_id());
+    const std::filesystem::path tmp = path.parent_path() / tmp_name.str();
+    {
+        const std::string bytes = header + table.serialize();
+        const uint64_t check    = content_hash(bytes);
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out << bytes;
+        out.write(reinterpret_cast<const char*>(&check), sizeof check);
+        out.close();
+        if (!out) {
+            std::filesystem::remove(tmp, ec);
+            return;
+        }
+    }
+    std::filesystem::rename(tmp, path, ec);
+    if (ec)
+        std::filesystem::remove(tmp, ec);
+#else
+    (void)rates, (void)shutter_s, (void)dev, (void)table;
+#endif
+}
+
+}  // namespace
+
 std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& rates,
                                                          double shutter_s, const Development& dev,
                                                          const DevelopTable::Options& options)
@@ -234,9 +483,13 @@ std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& ra
             if (k == key)
                 return t;
     }
-    auto table = std::make_shared<const DevelopTable>(rates, shutter_s, dev, options);
-    if (!table->complete())
-        return table;  // over its budget or cancelled: unfinished, never kept
+    std::shared_ptr<const DevelopTable> table = read_cached_table(rates, shutter_s, dev, options);
+    if (!table) {
+        table = std::make_shared<const DevelopTable>(rates, shutter_s, dev, options);
+        if (!table->complete())
+            return table;  // over its budget or cancelled: unfinished, never kept
+        write_cached_table(rates, shutter_s, dev, *table);
+    }
     std::lock_guard<std::mutex> lock(mutex);
     constexpr size_t kEntries = 16;
     if (cache.size() >= kEntries)

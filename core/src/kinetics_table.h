@@ -14,9 +14,11 @@
 #include <cstdint>
 #include <atomic>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "development.h"
+#include "filmgrain/render.h"  // table_cache_dir
 #include "kinetics.h"
 
 namespace filmgrain {
@@ -76,6 +78,7 @@ public:
         return interpolate(n);
     }
     uint64_t max_photons() const { return m_options.max_photons; }
+    const Options& options() const { return m_options; }
     /// Standard error of P at n: the node's at a node, the larger of the
     /// two neighbours' between nodes.
     double standard_error(uint64_t n) const;
@@ -100,7 +103,15 @@ public:
     /// then the table must not be used (its nodes are unfinished).
     bool complete() const { return m_complete; }
 
+    /// The table as bytes (its options' contents and every node), and
+    /// back: `read` gives a table equal to the one written, or none when
+    /// the bytes are not a complete table written with these options.
+    std::string serialize() const;
+    static std::shared_ptr<const DevelopTable> deserialize(const std::string& bytes,
+                                                           const Options& options);
+
 private:
+    DevelopTable() = default;
     double interpolate(uint64_t n) const;
 
     Options m_options;
@@ -120,6 +131,15 @@ private:
 /// never depend on call history. Incomplete builds (over their step budget,
 /// or cancelled) are returned but never kept. Bounded: the oldest of 16
 /// entries goes first. Thread safe.
+///
+/// Complete tables are also kept on disk (table_cache_dir()), one file per
+/// key (table_cache_dir(), filmgrain/render.h), so that other processes (a
+/// farm's frames, a command run again) read
+/// them instead of building them: a file is used only if it holds this key
+/// and was written by a build of the same table code, compiler and flags
+/// (FILMGRAIN_TABLE_CODE_ID); anything else in it (a partial or foreign
+/// file) is ignored and replaced. Files are written whole (a temporary
+/// file renamed into place); a cache that cannot be written is skipped.
 std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& rates,
                                                          double shutter_s, const Development& dev,
                                                          const DevelopTable::Options& options);

@@ -3,10 +3,16 @@
 #include "kinetics_table.h"
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include "expectations.h"
+
+#include <unistd.h>
 
 namespace filmgrain {
 namespace {
@@ -37,6 +43,95 @@ TEST(DevelopTable, AgreesWithIndependentRunsOfTheChain)
         EXPECT_EQ(table.probability(2), dev.develop_probability(0));
         EXPECT_GE(table.max_probability(), table.min_probability());
     }
+}
+
+void expect_same_table(const DevelopTable& a, const DevelopTable& b)
+{
+    ASSERT_EQ(a.node_count(), b.node_count());
+    for (uint64_t n = 0; n <= a.max_photons(); ++n) {
+        ASSERT_EQ(a.probability(n), b.probability(n)) << n;
+        ASSERT_EQ(a.standard_error(n), b.standard_error(n)) << n;
+    }
+    EXPECT_EQ(a.max_interpolation_error(), b.max_interpolation_error());
+    EXPECT_EQ(a.total_runs(), b.total_runs());
+    EXPECT_EQ(a.total_steps(), b.total_steps());
+}
+
+TEST(DevelopTable, BytesGiveTheSameTableOrNone)
+{
+    Stock stock;
+    const Development dev(stock);
+    DevelopTable::Options o;
+    o.max_photons           = 150;
+    o.target_standard_error = 5e-3;
+    o.stream_key            = 11;
+    const DevelopTable table({ 1e7, 1e6, 10 }, 0.02, dev, o);
+    const std::string bytes = table.serialize();
+    const auto back         = DevelopTable::deserialize(bytes, o);
+    ASSERT_TRUE(back);
+    expect_same_table(table, *back);
+    // Other options, cut short, or with more after it: none.
+    DevelopTable::Options other = o;
+    other.stream_key            = 12;
+    EXPECT_FALSE(DevelopTable::deserialize(bytes, other));
+    EXPECT_FALSE(DevelopTable::deserialize(bytes.substr(0, bytes.size() - 1), o));
+    EXPECT_FALSE(DevelopTable::deserialize(bytes.substr(0, bytes.size() / 2), o));
+    EXPECT_FALSE(DevelopTable::deserialize(bytes + "x", o));
+    EXPECT_FALSE(DevelopTable::deserialize(std::string(), o));
+}
+
+/// Sets an environment variable for one scope.
+struct ScopedEnv {
+    std::string name;
+    ScopedEnv(const char* n, const std::string& value) : name(n) { setenv(n, value.c_str(), 1); }
+    ~ScopedEnv() { unsetenv(name.c_str()); }
+};
+
+TEST(DevelopTable, KeptOnDiskForOtherProcesses)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path()
+                         / ("filmgrain-table-cache-test-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    Stock stock;
+    const Development dev(stock);
+    DevelopTable::Options o;
+    o.max_photons           = 120;
+    o.target_standard_error = 8e-3;
+    o.stream_key            = 0x5eed0000 + static_cast<uint64_t>(::getpid());  // not in memory
+    {
+        ScopedEnv env("FILMGRAIN_CACHE_DIR", dir.string());
+        if (table_cache_dir().empty())
+            GTEST_SKIP() << "this build keeps no tables on disk (no table code id)";
+        EXPECT_EQ(table_cache_dir(), dir.string());
+        const auto table = shared_develop_table({ 1e7, 1e6, 10 }, 0.02, dev, o);
+        ASSERT_TRUE(table->complete());
+        // One whole file, no temporary left; it holds the table's bytes
+        // (then an 8-byte check).
+        std::vector<fs::path> files;
+        for (const auto& e : fs::directory_iterator(dir / "tables"))
+            files.push_back(e.path());
+        ASSERT_EQ(files.size(), 1u);
+        EXPECT_EQ(files[0].extension(), ".bin");
+        std::ifstream in(files[0], std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)),
+                                std::istreambuf_iterator<char>());
+        const std::string own = table->serialize();
+        ASSERT_GT(bytes.size(), own.size() + 8);
+        EXPECT_TRUE(bytes.compare(bytes.size() - 8 - own.size(), own.size(), own) == 0);
+    }
+    {
+        // "off": nothing written.
+        ScopedEnv env("FILMGRAIN_CACHE_DIR", "off");
+        EXPECT_EQ(table_cache_dir(), "");
+        o.stream_key += 1;
+        shared_develop_table({ 1e7, 1e6, 10 }, 0.02, dev, o);
+        size_t files = 0;
+        for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir / "tables"))
+            ++files;
+        EXPECT_EQ(files, 1u);
+    }
+    fs::remove_all(dir);
 }
 
 TEST(DevelopTable, DeterministicForAnyThreadCount)

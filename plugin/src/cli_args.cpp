@@ -504,6 +504,18 @@ std::string help_text()
                    + std::string(default_preset_name()) + " > my.json, edit, then "
                    "--filmgrain:stock=my.json.");
 
+    out << "\nTable cache:\n";
+    append_wrapped(out, "    ",
+                   "The P(develop | N photons) tables that auto builds (seconds a stock) are "
+                   "kept on disk for the next run: in $FILMGRAIN_CACHE_DIR/tables, else "
+                   "$XDG_CACHE_HOME/filmgrain/tables, else ~/.cache/filmgrain/tables "
+                   "(FILMGRAIN_CACHE_DIR=off: none). A run reads a table only if it was "
+                   "built by the same table code, compiler and flags; the pixels are the "
+                   "same read or built. Delete the directory to clear it. Now: "
+                   + (table_cache_dir().empty() ? std::string("off")
+                                                 : table_cache_dir() + "/tables")
+                   + ".");
+
     out << "\nColour:\n";
     append_wrapped(out, "    ",
                    "INPUT is converted to the OCIO config's scene_linear role. The config "

@@ -312,3 +312,52 @@ def test_overscan_is_rendered_as_film_and_keeps_both_windows(run, dirs):
     r = run(indir / "plate.exr", f"--filmgrain:{FAST}:roi=-9,0,4,4", "-o", outdir / "bad.exr")
     assert r.returncode == 1 and "with its overscan" in r.stderr, r.stderr
     assert sorted(os.listdir(outdir)) == ["big.exr", "neg.exr", "roi.exr"]
+
+
+def test_tables_kept_on_disk_for_the_next_process(run, tmp_path):
+    """The P(develop | N) tables one run builds are read by the next
+    (FILMGRAIN_CACHE_DIR): the same bytes out, the same statistics; a
+    damaged cache file is ignored and written again; "off" keeps none."""
+    def pixel_bytes(path):
+        e = Exr(path)
+        return b"".join(e.channels[n].tobytes() for n in e.names)
+
+    def files(tables):
+        return {t: (t.stat().st_ino, t.stat().st_mtime_ns, t.stat().st_size) for t in tables}
+
+    cache = tmp_path / "cache"
+    env = clean_env(FILMGRAIN_CACHE_DIR=str(cache))
+    args = ["--wedge", "--filmgrain:stock=paper:kinetics=table:scan=240x24"]
+    r = run(*args, "-o", tmp_path / "w0.exr", "--stats", tmp_path / "w0.json", env=env)
+    assert r.returncode == 0, r.stderr
+    tables = sorted((cache / "tables").glob("table-*.bin"))
+    assert tables, sorted(cache.rglob("*"))
+    assert not list((cache / "tables").glob("*.tmp-*"))
+    written = files(tables)
+    originals = {t: t.read_bytes() for t in tables}
+    # The next process reads them (a build would write its file again).
+    r = run(*args, "-o", tmp_path / "w1.exr", "--stats", tmp_path / "w1.json", env=env)
+    assert r.returncode == 0, r.stderr
+    assert files(tables) == written
+    assert pixel_bytes(tmp_path / "w0.exr") == pixel_bytes(tmp_path / "w1.exr")
+    reasons = [[l["reason"] for l in read_json(tmp_path / f"w{i}.json")["layers"]]
+               for i in range(2)]
+    assert reasons[0] == reasons[1]
+    # Damaged (one byte changed, or cut in half): ignored, rebuilt (the same
+    # pixels), written whole again.
+    damages = (lambda b: b[: len(b) // 2] + bytes([b[len(b) // 2] ^ 1]) + b[len(b) // 2 + 1:],
+               lambda b: b[: len(b) // 2])
+    for i, damage in enumerate(damages):
+        for t in tables:
+            t.write_bytes(damage(t.read_bytes()))
+        out = tmp_path / f"d{i}.exr"
+        r = run(*args, "-o", out, env=env)
+        assert r.returncode == 0, r.stderr
+        assert pixel_bytes(out) == pixel_bytes(tmp_path / "w0.exr")
+        assert {t: t.read_bytes() for t in tables} == originals
+    # off: nothing kept.
+    off = tmp_path / "off"
+    r = run(*args, "-o", tmp_path / "w3.exr",
+            env=clean_env(FILMGRAIN_CACHE_DIR="off", XDG_CACHE_HOME=str(off)))
+    assert r.returncode == 0, r.stderr
+    assert not off.exists()

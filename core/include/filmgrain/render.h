@@ -246,4 +246,11 @@ struct RenderStats {
 Status render_negative(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                        const RenderSettings& settings, float* density, RenderStats* stats);
 
+/// The directory of the on-disk cache of P(develop | N) tables (kept for
+/// other processes; core/src/kinetics_table.h): $FILMGRAIN_CACHE_DIR if set
+/// ("" or "off": no disk cache), else $XDG_CACHE_HOME/filmgrain, else
+/// $HOME/.cache/filmgrain; "" when none (or when this build has no table
+/// code id). Read from the environment at every call.
+std::string table_cache_dir();
+
 }  // namespace filmgrain
