@@ -104,8 +104,9 @@ public:
     bool complete() const { return m_complete; }
 
     /// The table as bytes (its options' contents and every node), and
-    /// back: `read` gives a table equal to the one written, or none when
-    /// the bytes are not a complete table written with these options.
+    /// back: deserialize gives a table equal to the one serialized, or none
+    /// when the bytes are not a complete table serialized with these
+    /// options.
     std::string serialize() const;
     static std::shared_ptr<const DevelopTable> deserialize(const std::string& bytes,
                                                            const Options& options);
@@ -132,14 +133,15 @@ private:
 /// or cancelled) are returned but never kept. Bounded: the oldest of 16
 /// entries goes first. Thread safe.
 ///
-/// Complete tables are also kept on disk (table_cache_dir()), one file per
-/// key (table_cache_dir(), filmgrain/render.h), so that other processes (a
-/// farm's frames, a command run again) read
-/// them instead of building them: a file is used only if it holds this key
-/// and was written by a build of the same table code, compiler and flags
-/// (FILMGRAIN_TABLE_CODE_ID); anything else in it (a partial or foreign
-/// file) is ignored and replaced. Files are written whole (a temporary
-/// file renamed into place); a cache that cannot be written is skipped.
+/// Complete tables are also kept on disk, one file per key in
+/// table_cache_dir() (filmgrain/render.h), so that other processes (a
+/// farm's frames, a command run again) read them instead of building them:
+/// a file is used only if it holds this key, was written by a build of the
+/// same table code, compiler and flags (FILMGRAIN_TABLE_CODE_ID) and passes
+/// its check; anything else (a partial, damaged or foreign file) is ignored
+/// and replaced. Files are written whole (a temporary file renamed into
+/// place); a cache that cannot be written is skipped. Unbounded: a program
+/// that builds tables for many trial stocks (filmgrain-fit) turns it off.
 std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& rates,
                                                          double shutter_s, const Development& dev,
                                                          const DevelopTable::Options& options);

@@ -154,6 +154,10 @@ nlohmann::json figures_json(const sm::DatasheetFigures& f,
 
 int main(int argc, char** argv)
 {
+    // A fit builds P(develop | N) tables for thousands of trial stocks, each
+    // used once: none is kept on disk (kinetics_table.h), unless the caller
+    // names a cache directory.
+    setenv("FILMGRAIN_CACHE_DIR", "off", /*overwrite=*/0);
     filmgrain::fit::FitOptions opt;
     std::string sheet_path, out_path, report_dir, measure_path, start_path, name;
     bool quiet = false, check = false;
