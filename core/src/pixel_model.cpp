@@ -18,9 +18,14 @@ namespace {
 /// size_quadrature's range and nodes (145: step 1/8).
 constexpr double kSizeZ  = kSizeQuadratureZ;
 constexpr int kSizeNodes = 145;
-/// Distances h at which the covariance is integrated (midpoint rule on
-/// [0, largest diameter]).
+/// Distances h at which the covariance is integrated (Integrator's cells:
+/// [0, h_min], then geometric up to the largest image's overlap range).
 constexpr int kDistanceNodes = 512;
+/// h_min over the overlap range of the smallest image that counts (size
+/// nodes of weight above kSmallestImageWeight): the first cell then holds
+/// at most ~(1/1024)^2 of any image's share of the covariance integral.
+constexpr double kFirstCellShare      = 1.0 / 1024.0;
+constexpr double kSmallestImageWeight = 1e-9;
 /// The exposure values tabulated: log-spaced, 16 per octave, from 2^-16 to
 /// 2^12 times grey (0.18); v = 0 is its own node. A property of the scene,
 /// never of the pixels, so that every ROI uses the same table.
@@ -85,11 +90,13 @@ inline double small_expm1(double x)
 /// The quadrature and the image overlaps of a layer's populations, prepared once.
 class Integrator {
 public:
+    /// `distance_nodes`: cells of the distance grid (kDistanceNodes; more
+    /// only to test convergence).
     Integrator(const std::vector<PixelPopulation>& pops, double px_um, double py_um,
-               const ImageOverlap& image)
+               const ImageOverlap& image, int distance_nodes = kDistanceNodes)
         : m_pops(pops), m_image(image), m_px_um(px_um), m_py_um(py_um)
     {
-        double h_max_um = 0.0;
+        double h_max_um = 0.0, h_min_um = std::numeric_limits<double>::infinity();
         for (const PixelPopulation& p : pops) {
             Sizes sz;
             for (const SizeNode& node : size_quadrature(*p.population)) {
@@ -100,14 +107,16 @@ public:
                 // (z = 9 would stretch the distance grid for nothing).
                 if (node.weight > 1e-15)
                     h_max_um = std::max(h_max_um, image.overlap_range_um(r_um));
+                if (node.weight > kSmallestImageWeight)
+                    h_min_um = std::min(h_min_um, kFirstCellShare * image.overlap_range_um(r_um));
             }
             m_sizes.push_back(std::move(sz));
         }
-        m_dh_um = h_max_um / kDistanceNodes;
+        distance_grid(std::min(h_min_um, h_max_um), h_max_um, std::max(distance_nodes, 2));
         for (Sizes& sz : m_sizes)
             for (size_t k = 0; k < sz.r_um.size(); ++k)
-                for (int j = 0; j < kDistanceNodes; ++j)
-                    sz.overlap_um2.push_back(image.overlap_um2(sz.r_um[k], (j + 0.5) * m_dh_um));
+                for (double h_um : m_h_um)
+                    sz.overlap_um2.push_back(image.overlap_um2(sz.r_um[k], h_um));
         lag_weights();
     }
 
@@ -122,7 +131,7 @@ public:
     Sums sums(double v) const
     {
         Sums s;
-        s.g.assign(kDistanceNodes, 0.0);
+        s.g.assign(m_h_um.size(), 0.0);
         for (size_t p = 0; p < m_pops.size(); ++p) {
             const PixelPopulation& pp = m_pops[p];
             const Sizes& sz           = m_sizes[p];
@@ -134,9 +143,9 @@ public:
                 const double nw = n * sz.w[k] * pd;
                 s.exponent += nw * m_image.blocking_um2(sz.r_um[k]);
                 s.developed += nw;
-                const double* overlap = &sz.overlap_um2[k * kDistanceNodes];
-                for (int j = 0; j < kDistanceNodes; ++j)
-                    s.g[static_cast<size_t>(j)] += nw * overlap[j];
+                const double* overlap = &sz.overlap_um2[k * m_h_um.size()];
+                for (size_t j = 0; j < m_h_um.size(); ++j)
+                    s.g[j] += nw * overlap[j];
             }
         }
         return s;
@@ -160,12 +169,12 @@ public:
         // lags' weights (lag_weights).
         LagArray cov {};
         double integral = 0.0;
-        for (int j = 0; j < kDistanceNodes; ++j) {
-            const double c = m.mean * m.mean * small_expm1(factor * g[static_cast<size_t>(j)]);
-            const double* w = &m_lag_weight[static_cast<size_t>(j) * kLagCount];
+        for (size_t j = 0; j < m_h_um.size(); ++j) {
+            const double c = m.mean * m.mean * small_expm1(factor * g[j]);
+            const double* w = &m_lag_weight[j * kLagCount];
             for (int lag = 0; lag < kLagCount; ++lag)
                 cov[static_cast<size_t>(lag)] += c * w[lag];
-            integral += c * m_area_weight[static_cast<size_t>(j)];
+            integral += c * m_area_weight[j];
         }
         m.variance = std::max(0.0, cov[0]);
         if (m.variance > 0.0) {
@@ -180,6 +189,32 @@ public:
     }
 
 private:
+    /// The cells of the distance grid and a node in each: [0, h_min] (its
+    /// midpoint), then `nodes` - 1 cells whose ends grow geometrically to
+    /// h_max (their geometric midpoints), with the cell's integral of h dh.
+    /// The images' overlaps vary on their own scale, from the smallest
+    /// grain's to the largest's (a factor 10^6 for a wide lognormal): a
+    /// uniform grid fine enough for the smallest would need millions of
+    /// cells; the geometric one resolves every scale alike (relative
+    /// spacing ln(h_max / h_min) / nodes; PixelModel.VarianceConverges).
+    void distance_grid(double h_min_um, double h_max_um, int nodes)
+    {
+        m_h_um.assign(static_cast<size_t>(nodes), 0.0);
+        m_h_dh_um2.assign(static_cast<size_t>(nodes), 0.0);
+        if (!(h_max_um > 0.0))  // no image has an extent: no covariance
+            return;
+        m_h_um[0]     = 0.5 * h_min_um;
+        m_h_dh_um2[0] = 0.5 * h_min_um * h_min_um;
+        const double q = std::pow(h_max_um / h_min_um, 1.0 / (nodes - 1));
+        double e0      = h_min_um;
+        for (int j = 1; j < nodes; ++j) {
+            const double e1 = j + 1 == nodes ? h_max_um : e0 * q;
+            m_h_um[static_cast<size_t>(j)]     = std::sqrt(e0 * e1);
+            m_h_dh_um2[static_cast<size_t>(j)] = 0.5 * (e1 * e1 - e0 * e0);
+            e0 = e1;
+        }
+    }
+
     /// The weight of each distance node h in the covariance of each lag
     /// (i, j): Cov(i, j) = sum over nodes of C(h) times
     ///   h dh / A^2  int_0^{pi/2} [T_x(h c - i px) + T_x(h c + i px)]
@@ -194,17 +229,17 @@ private:
     void lag_weights()
     {
         constexpr int kAngles = 256;
-        const double px_um = m_px_um, py_um = m_py_um, dh_um = m_dh_um, area_um2 = px_um * py_um;
+        const double px_um = m_px_um, py_um = m_py_um, area_um2 = px_um * py_um;
         const auto tri = [](double t_um, double pitch_um) {
             return std::max(0.0, pitch_um - std::fabs(t_um));
         };
-        m_lag_weight.assign(static_cast<size_t>(kDistanceNodes) * kLagCount, 0.0);
-        m_area_weight.assign(kDistanceNodes, 0.0);
+        m_lag_weight.assign(m_h_um.size() * kLagCount, 0.0);
+        m_area_weight.assign(m_h_um.size(), 0.0);
         const double dtheta = 0.5 * M_PI / kAngles;
-        for (int n = 0; n < kDistanceNodes; ++n) {
-            const double h_um = (n + 0.5) * dh_um;
-            m_area_weight[static_cast<size_t>(n)] = 2.0 * M_PI * h_um * dh_um / area_um2;
-            double* w = &m_lag_weight[static_cast<size_t>(n) * kLagCount];
+        for (size_t n = 0; n < m_h_um.size(); ++n) {
+            const double h_um = m_h_um[n], h_dh_um2 = m_h_dh_um2[n];
+            m_area_weight[n] = 2.0 * M_PI * h_dh_um2 / area_um2;
+            double* w = &m_lag_weight[n * kLagCount];
             for (int t = 0; t < kAngles; ++t) {
                 const double theta = (t + 0.5) * dtheta;
                 const double hx_um = h_um * std::cos(theta), hy_um = h_um * std::sin(theta);
@@ -218,7 +253,7 @@ private:
                         w[j * kLagSide + i] += tx[i] * ty[j];
             }
             for (int lag = 0; lag < kLagCount; ++lag)
-                w[lag] *= h_um * dh_um * dtheta / (area_um2 * area_um2);
+                w[lag] *= h_dh_um2 * dtheta / (area_um2 * area_um2);
         }
     }
 
@@ -227,7 +262,9 @@ private:
     };
     const std::vector<PixelPopulation>& m_pops;
     const ImageOverlap& m_image;
-    double m_px_um, m_py_um, m_dh_um = 0.0;
+    double m_px_um, m_py_um;
+    std::vector<double> m_h_um;      ///< [distance node] its distance
+    std::vector<double> m_h_dh_um2;  ///< [distance node] its cell's integral of h dh
     std::vector<Sizes> m_sizes;
     std::vector<double> m_lag_weight;   // [distance node][lag]
     std::vector<double> m_area_weight;  // [distance node]
@@ -347,9 +384,12 @@ double copula_filter(const LagArray& rho, int lags, LagArray& f)
 
 PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& populations,
                                         double px_um, double py_um, double v,
-                                        const ImageOverlap& image, double log_factor)
+                                        const ImageOverlap& image, double log_factor,
+                                        int distance_nodes)
 {
-    return Integrator(populations, px_um, py_um, image)(v, std::exp(-log_factor));
+    return Integrator(populations, px_um, py_um, image,
+                      distance_nodes > 0 ? distance_nodes : kDistanceNodes)(
+        v, std::exp(-log_factor));
 }
 
 PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,

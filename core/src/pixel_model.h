@@ -159,9 +159,11 @@ public:
     void draw_at(double v, double log_factor, Draw& out) const;
 
     /// Moments computed directly (no table): for tests and the table.
+    /// `distance_nodes` > 0: the covariance integral on that many distance
+    /// cells instead of the table's (tests of its convergence).
     static Moments compute(const std::vector<PixelPopulation>& populations, double px_um,
                            double py_um, double v, const ImageOverlap& image = ImageOverlap(),
-                           double log_factor = 0.0);
+                           double log_factor = 0.0, int distance_nodes = 0);
 
     /// Lags kept each way (0 to kMaxLag), or -1 where even kMaxLag leaves
     /// more than kDroppedCorrelation out (the pixel scale cannot draw it).
