@@ -635,7 +635,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     // kernel is drawn from its pixel statistics where they describe it:
     // pixel correlations that end within kMaxLag pixels (at most 1% of
     // their sum beyond), and enough developed grains per pixel even at zero
-    // exposure (fog) for its Gamma law (measured in docs/performance).
+    // exposure (fog) for its skewed law (measured in docs/performance).
     for (size_t l = 0; l < out.size() && !exact; ++l) {
         LayerPlan& plan = out[l];
         const Layer& layer = stock.layers[l];
@@ -704,7 +704,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
                "(interpolation error: mean "
             << format_g(pm.max_mean_error()) << ", sd " << format_g(pm.max_sd_error())
-            << "), a Gamma law through a Gaussian copula with the correlations to " << pm.lags()
+            << "), two Gamma laws (covered and open part) weighted by the mean through a "
+               "Gaussian copula with the correlations to "
+            << pm.lags()
             << " pixels each way (" << format_g(100.0 * pm.max_dropped_correlation())
             << "% of their sum beyond; its filter on " << filter_lags(pm.lags())
             << " lags, correlation error " << format_g(pm.max_copula_error()) << ")"

@@ -555,17 +555,47 @@ void PixelModel::draw_at(double v, double log_factor, Draw& out) const
 
 namespace {
 
-/// The Wilson-Hilferty cube of skewed_draw for (mean, variance): the part
-/// m (a + b z)^3 with a = 1 - c, b = sqrt(c), c = 1 / (9 k), k = m^2 / V;
-/// false where the draw is its mean (no variance).
-bool wilson_hilferty(double mean, double variance, double& a, double& b)
+/// skewed_draw's law for (mean, variance): two Wilson-Hilferty cubes
+/// m (a + b z)^3, Gamma(k = m^2 / V) each, one for the open part (mean m
+/// = mean) and one for the covered part (m = 1 - mean, taken at -z so that
+/// both grow with z), weighted 1 - mean and mean, and the scale that
+/// gives their sum the variance V; and the sum's Hermite coefficients c1,
+/// c2, c3 (He1, He2, He3) before that scale. False where the draw is its
+/// mean (no variance, or a mean of 0 or 1).
+struct SkewedLaw {
+    double m_open = 0.0, a_open = 0.0, b_open = 0.0;
+    double m_covered = 0.0, a_covered = 0.0, b_covered = 0.0;
+    double weight_covered = 0.0, scale = 1.0;
+    double c1 = 0.0, c2 = 0.0, c3 = 0.0;
+};
+
+bool skewed_law(double mean, double variance, SkewedLaw& law)
 {
-    const double m = mean >= 0.5 ? 1.0 - mean : mean;
-    if (!(m > 0.0) || !(variance > 0.0))
+    if (!(mean > 0.0 && mean < 1.0) || !(variance > 0.0))
         return false;
-    const double c = variance / (9.0 * m * m);
-    a = 1.0 - c;
-    b = std::sqrt(c);
+    // (a + b z)^3 = (a^3 + 3 a b^2) + (3 a^2 b + 3 b^3) He1 + 3 a b^2 He2 + b^3 He3.
+    const auto cube = [variance](double m, double& a, double& b, double& c1, double& c2,
+                                 double& c3) {
+        const double c = variance / (9.0 * m * m);
+        a  = 1.0 - c;
+        b  = std::sqrt(c);
+        c1 = m * (3.0 * a * a * b + 3.0 * b * b * b);
+        c2 = m * 3.0 * a * b * b;
+        c3 = m * b * b * b;
+    };
+    double o1, o2, o3, k1, k2, k3;
+    law.m_open    = mean;
+    law.m_covered = 1.0 - mean;
+    cube(law.m_open, law.a_open, law.b_open, o1, o2, o3);
+    cube(law.m_covered, law.a_covered, law.b_covered, k1, k2, k3);
+    // 1 - cube(-z): He1 and He3 keep their sign, He2 flips.
+    const double w     = mean;
+    law.weight_covered = w;
+    law.c1             = (1.0 - w) * o1 + w * k1;
+    law.c2             = (1.0 - w) * o2 - w * k2;
+    law.c3             = (1.0 - w) * o3 + w * k3;
+    const double v     = law.c1 * law.c1 + 2.0 * law.c2 * law.c2 + 6.0 * law.c3 * law.c3;
+    law.scale          = v > 0.0 ? std::sqrt(variance / v) : 1.0;
     return true;
 }
 
@@ -573,33 +603,38 @@ bool wilson_hilferty(double mean, double variance, double& a, double& b)
 
 double skewed_draw(double mean, double variance, double z)
 {
-    // A fraction in [0, 1] with the model's mean and variance: where most
-    // of the pixel is open (mean >= 1/2) its covered part, else its open
-    // part, is Gamma distributed: the Boolean model's few covering discs
-    // (or few remaining holes) make that part skewed to the right, with
-    // mass near 0. Gamma(shape k = m^2 / V, scale V / m) by the
-    // Wilson-Hilferty cube of a normal (z, the pixel's correlated normal:
-    // a Gaussian copula).
-    double a = 0.0, b = 0.0;
-    if (!wilson_hilferty(mean, variance, a, b))
+    // A fraction in [0, 1] with the model's mean and variance, skewed as
+    // the Boolean model's pixels are where they are skewed most: where most
+    // of the pixel is open its covered part is a few images (right-skewed,
+    // mass near 0: Gamma), where most is covered its open part is a few
+    // holes (likewise). In between, both at once: the two Gamma laws
+    // (Wilson-Hilferty cubes of the same normal z, the pixel's correlated
+    // normal: a Gaussian copula) weighted by the mean, so that the skew
+    // passes through 0 at a mean of 1/2 continuously (a switch from one
+    // Gamma to its mirror there made pixels 24% too spread on VISION3
+    // 500T's blue layer near that mean: docs/performance), and scaled about
+    // the mean to the model's variance.
+    SkewedLaw law;
+    if (!skewed_law(mean, variance, law))
         return mean;
-    const bool open = mean >= 0.5;
-    const double m  = open ? 1.0 - mean : mean;
-    const double w  = std::max(0.0, a + z * b);
-    const double g  = std::min(1.0, m * w * w * w);
-    return open ? 1.0 - g : g;
+    const auto cube = [](double m, double a, double b, double z) {
+        const double w = std::max(0.0, a + z * b);
+        return m * w * w * w;
+    };
+    const double w = law.weight_covered;
+    const double t = (1.0 - w) * cube(law.m_open, law.a_open, law.b_open, z)
+                     + w * (1.0 - cube(law.m_covered, law.a_covered, law.b_covered, -z));
+    return std::clamp(mean + law.scale * (t - mean), 0.0, 1.0);
 }
 
 double copula_normal_correlation(double mean, double variance, double rho)
 {
-    double a = 0.0, b = 0.0;
-    if (!wilson_hilferty(mean, variance, a, b) || !(rho > 0.0))
+    SkewedLaw law;
+    if (!skewed_law(mean, variance, law) || !(rho > 0.0))
         return std::max(0.0, rho);
     if (rho >= 1.0)
         return 1.0;
-    // (a + b z)^3 = (a^3 + 3 a b^2) + (3 a^2 b + 3 b^3) He1 + 3 a b^2 He2 + b^3 He3.
-    const double c1 = 3.0 * a * a * b + 3.0 * b * b * b, c2 = 3.0 * a * b * b, c3 = b * b * b;
-    const double w1 = c1 * c1, w2 = 2.0 * c2 * c2, w3 = 6.0 * c3 * c3;
+    const double w1 = law.c1 * law.c1, w2 = 2.0 * law.c2 * law.c2, w3 = 6.0 * law.c3 * law.c3;
     const double total = w1 + w2 + w3;
     // Increasing on [0, 1] from 0 to 1: bisection to 1e-12.
     double lo = 0.0, hi = 1.0;

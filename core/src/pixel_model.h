@@ -14,8 +14,9 @@
 //   Cov(i, j) = (1/A^2) int C(|h|) T_x(h_x - i px) T_y(h_y - j py) d^2h,
 // T_x(t) = max(0, px - |t|) the overlap of two pixel rows t apart; V =
 // Cov(0, 0). PixelModel tabulates these over the exposure value v, to
-// kMaxLag pixels each way, and the pixel kernel draws each pixel from a Gamma
-// law with that mean and variance (skewed_draw) through a Gaussian copula:
+// kMaxLag pixels each way, and the pixel kernel draws each pixel from a
+// skewed law (two Gamma laws, skewed_draw) with that mean and variance
+// through a Gaussian copula:
 // the normal (f * z), z i.i.d. standard normals keyed by absolute pixel
 // (deterministic for any tiling), f the symmetric filter whose
 // autocorrelation is the normals' correlation that skewed_draw turns into
@@ -208,19 +209,21 @@ private:
     double m_max_mean_error = 0.0, m_max_sd_error = 0.0;
 };
 
-/// A pixel's transmittance from its mean and variance and its normal z:
-/// Gamma distributed in its covered part where the mean is at least 1/2,
-/// in its open part below (Wilson-Hilferty), in [0, 1].
+/// A pixel's transmittance from its mean and variance and its normal z, in
+/// [0, 1]: (1 - mean) times a Gamma law of its open part plus mean times
+/// one minus a Gamma law of its covered part (each by the Wilson-Hilferty
+/// cube of z, with the pixel's mean and variance), scaled about the mean to
+/// the variance: skewed like a few covering images where mostly open, like
+/// a few holes where mostly covered, and continuously in between.
 double skewed_draw(double mean, double variance, double z);
 
 /// The correlation two standard normals need for their skewed_draw's (same
-/// mean and variance) to have correlation `rho` in [0, 1]: the
-/// Wilson-Hilferty cube m (a + b z)^3 is c0 + c1 He1 + c2 He2 + c3 He3 in
-/// Hermite polynomials, so the draws' correlation at normal correlation r is
-/// (c1^2 r + 2 c2^2 r^2 + 6 c3^2 r^3) / (c1^2 + 2 c2^2 + 6 c3^2), solved
-/// here for r (exact but for skewed_draw's clamps: the cube's root below
-/// z = -a / b, and 1). Skewed pixels (few grains, or few holes) need
-/// r > rho: their law bends the normals' correlation down.
+/// mean and variance) to have correlation `rho` in [0, 1]: skewed_draw is
+/// a cubic in z (but for its clamps: a cube's root, 0 and 1), c0 + c1 He1
+/// + c2 He2 + c3 He3 in Hermite polynomials, so the draws' correlation at
+/// normal correlation r is (c1^2 r + 2 c2^2 r^2 + 6 c3^2 r^3) / (c1^2 +
+/// 2 c2^2 + 6 c3^2), solved here for r. Skewed pixels (few grains, or few
+/// holes) need r > rho: their law bends the normals' correlation down.
 double copula_normal_correlation(double mean, double variance, double rho);
 
 /// Writes the transmittance of the pixels [x0, x1) x [y0, y1) of one layer,

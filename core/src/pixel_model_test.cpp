@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -379,8 +380,10 @@ TEST(PixelModel, VarianceConverges)
 // pixel law.
 TEST(PixelModel, CopulaNormalCorrelationGivesTheDrawsTheirCorrelation)
 {
-    for (const double mean : { 0.3, 0.002 }) {
-        const double variance = mean == 0.3 ? 0.002 : 2.5e-6;  // shapes 45 and 1.6
+    // Open-part shapes 45 and 1.6; at 0.5 both parts' 20; at 0.9 the
+    // covered part's 2.
+    for (const auto& [mean, variance] : { std::pair { 0.3, 0.002 }, std::pair { 0.002, 2.5e-6 },
+                                          std::pair { 0.5, 0.0125 }, std::pair { 0.9, 0.005 } }) {
         for (const double rho : { 0.1, 0.5, 0.9 }) {
             const double r = copula_normal_correlation(mean, variance, rho);
             EXPECT_GE(r, rho);
@@ -407,6 +410,40 @@ TEST(PixelModel, CopulaNormalCorrelationGivesTheDrawsTheirCorrelation)
                 << "mean " << mean << " rho " << rho;
         }
     }
+}
+
+// skewed_draw has the model's mean and variance (to the Wilson-Hilferty
+// cubes' own bias, c^3 of the mean with c = V / (9 m^2), and the clamps
+// to [0, 1]) from mostly open to mostly covered pixels, near-normal and
+// skewed, and
+// no jump in its law at a mean of 1/2 (the same normal a hair either side
+// gives the same draw).
+TEST(PixelModel, SkewedDrawHasTheMeanAndVariance)
+{
+    constexpr int kDraws = 400000;
+    for (const double mean : { 0.002, 0.05, 0.3, 0.5, 0.7, 0.95, 0.998 })
+        for (const double shape : { 40.0, 2.0 }) {
+            // Shape of the smaller part's Gamma law: (min(m, 1 - m))^2 / V,
+            // the variance at most 5% of a single grain's m (1 - m) (the
+            // pixel scale's pixels hold many).
+            const double part     = std::min(mean, 1.0 - mean);
+            const double variance = std::min(part * part / shape, 0.05 * mean * (1.0 - mean));
+            double s = 0.0, s2 = 0.0;
+            for (int i = 0; i < kDraws; ++i) {
+                // Midpoint quantiles: a stratified sample of the normal.
+                const double t = skewed_draw(mean, variance, normal_quantile((i + 0.5) / kDraws));
+                s += t;
+                s2 += t * t;
+            }
+            const double m = s / kDraws, v = s2 / kDraws - m * m;
+            const std::string what = "mean " + std::to_string(mean) + " shape "
+                                     + std::to_string(shape);
+            EXPECT_NEAR(m, mean, 2e-3 * part) << what;
+            EXPECT_NEAR(v / variance, 1.0, 0.02) << what;
+        }
+    for (const double z : { -3.0, -1.0, 0.0, 1.0, 3.0 })
+        EXPECT_NEAR(skewed_draw(0.5 - 1e-9, 0.01, z), skewed_draw(0.5 + 1e-9, 0.01, z), 1e-6)
+            << "z " << z;
 }
 
 // The copula's filter has the correlation it is given: Gaussian-shaped
