@@ -337,9 +337,9 @@ TEST(PixelModel, LagsSumToThePlane)
 // integral on 32 times as many cells, for narrow silver grains and for
 // wide (log sigma 0.7, like VISION3 500T's blue layer) grains with gaussian
 // clouds twice their size, whose images span a factor ~10^6 in size. A
-// uniform grid of the same 512 cells (the table's until 2026-12-02) put
-// the wide layer's variance 10-20% high: cells of ~1 um against clouds of
-// ~0.5 um.
+// uniform grid (the table's until commit f6987bb) fails here: 512 cells
+// against 16384 put this wide layer's variance 3-8% high (and VISION3
+// 500T's blue layer's ~16%: cells of ~1 um against clouds of ~0.5 um).
 TEST(PixelModel, VarianceConverges)
 {
     const TestLayer t;
@@ -415,9 +415,8 @@ TEST(PixelModel, CopulaNormalCorrelationGivesTheDrawsTheirCorrelation)
 // skewed_draw has the model's mean and variance (to the Wilson-Hilferty
 // cubes' own bias, c^3 of the mean with c = V / (9 m^2), and the clamps
 // to [0, 1]) from mostly open to mostly covered pixels, near-normal and
-// skewed, and
-// no jump in its law at a mean of 1/2 (the same normal a hair either side
-// gives the same draw).
+// skewed, and no jump in its law at a mean of 1/2 (the same normal a hair
+// either side gives the same draw).
 TEST(PixelModel, SkewedDrawHasTheMeanAndVariance)
 {
     constexpr int kDraws = 400000;
