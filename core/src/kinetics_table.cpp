@@ -30,8 +30,33 @@ namespace {
 struct NodeResult {
     double p      = 0.0;
     double se     = 0.0;
-    uint64_t runs = 0, events = 0;
+    uint64_t runs = 0, events = 0, arrivals = 0;
 };
+
+/// The n4 at which a run of the chain stops (stop_at_n4): the survival
+/// probability (1 - f)(1 - d)^n4 is then at most a thousandth of the target
+/// standard error, and n4 never falls, so the run's survival, taken as the
+/// value at that n4, is too high by less than that (the full chain would
+/// only have lowered it). Runs at large N, where every grain forms many
+/// development centres, stop after the first few instead of processing all
+/// N arrivals. No stop when centres do not develop (d = 0).
+uint64_t stop_n4(const Development& dev, double target_standard_error)
+{
+    return dev.n4_needed(std::max(1e-3 * target_standard_error, 1e-300));
+}
+
+/// One run of the chain for n photons on its own stream (key, salt, n,
+/// run): its survival probability and the steps it took (events and
+/// arrivals).
+double survival_run(uint64_t n, uint64_t key, uint64_t salt, uint64_t run,
+                    const KineticsRates& rates, double shutter_s, const Development& dev,
+                    uint64_t stop, uint64_t& events, uint64_t& arrivals)
+{
+    Rng rng(hash_ids(key, salt, n, run), Stage::kinetics);
+    const LatentImage c
+        = simulate_latent_image(n, shutter_s, rates, rng, &events, stop, &arrivals);
+    return dev.survival_probability(c.n4);
+}
 
 /// Chain steps spent by a build so far, against its budget (Options).
 struct Budget {
@@ -65,24 +90,22 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
     // keeps a small batch from stopping on a lucky zero variance).
     const int batch = std::max(32, static_cast<int>(std::min<uint64_t>(
                                        o.min_samples, o.min_samples * uint64_t(256) / n)));
+    const uint64_t stop = stop_n4(dev, o.target_standard_error);
     for (int done = 0; done < o.max_samples;) {
         if (budget.exceeded || cancel_requested(o.cancel))
             return r;
-        const uint64_t events_before = r.events;
-        const int done_before        = done;
+        const uint64_t steps_before = r.events + r.arrivals;
         for (int i = 0; i < batch && done < o.max_samples; ++i, ++done) {
-            Rng rng(hash_ids(o.stream_key, 0x7ab1e, n, static_cast<uint64_t>(done)),
-                    Stage::kinetics);
-            uint64_t events = 0;
-            const LatentImage c = simulate_latent_image(n, shutter_s, rates, rng, &events);
-            const double s      = dev.survival_probability(c.n4);
+            uint64_t events = 0, arrivals = 0;
+            const double s = survival_run(n, o.stream_key, 0x7ab1e, static_cast<uint64_t>(done),
+                                          rates, shutter_s, dev, stop, events, arrivals);
             sum += s;
             sum2 += s * s;
             r.events += events;
+            r.arrivals += arrivals;
         }
-        // Cost in chain steps: every run processes all n arrivals.
-        if (!budget.charge(r.events - events_before
-                           + n * static_cast<uint64_t>(done - done_before)))
+        // Cost in chain steps: events and photon arrivals processed.
+        if (!budget.charge(r.events + r.arrivals - steps_before))
             return r;
         r.runs          = static_cast<uint64_t>(done);
         const double m  = sum / done;
@@ -121,6 +144,7 @@ double DevelopTable::predicted_steps(const Options& options, const KineticsRates
 {
     constexpr int kPilotRuns = 16;
     const double target = options.target_standard_error;
+    const uint64_t stop = stop_n4(dev, target);
     double steps        = 0.0;
     for (uint64_t n : node_photons(options)) {
         if (n < 4)
@@ -128,14 +152,12 @@ double DevelopTable::predicted_steps(const Options& options, const KineticsRates
         double sum = 0.0, sum2 = 0.0;
         uint64_t pilot_steps = 0;
         for (int i = 0; i < kPilotRuns; ++i) {
-            Rng rng(hash_ids(options.stream_key, 0x9e55, n, static_cast<uint64_t>(i)),
-                    Stage::kinetics);
-            uint64_t events = 0;
-            const double s = dev.survival_probability(
-                simulate_latent_image(n, shutter_s, rates, rng, &events).n4);
+            uint64_t events = 0, arrivals = 0;
+            const double s = survival_run(n, options.stream_key, 0x9e55, static_cast<uint64_t>(i),
+                                          rates, shutter_s, dev, stop, events, arrivals);
             sum += s;
             sum2 += s * s;
-            pilot_steps += events + n;
+            pilot_steps += events + arrivals;
         }
         const double m = sum / kPilotRuns;
         const double v = std::max(0.0, sum2 / kPilotRuns - m * m);
@@ -179,7 +201,7 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
         m_max_se = std::max(m_max_se, r.se);
         m_total_runs += r.runs;
         m_total_events += r.events;
-        m_total_steps += r.events + r.runs * m_nodes_n[static_cast<size_t>(&r - results.data())];
+        m_total_steps += r.events + r.arrivals;
     }
     // Interpolation error: only between sparse nodes (dense nodes are exact
     // integers, nothing is interpolated there).

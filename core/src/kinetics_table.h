@@ -56,8 +56,12 @@ public:
     };
 
     /// Builds the table. Deterministic for any thread count: each node's
-    /// runs have their own streams. Cost: about sum over nodes of runs x N
-    /// chain steps.
+    /// runs have their own streams. Each run stops once its grain holds so
+    /// many development centres that its survival is below a thousandth of
+    /// the target standard error (the bias that leaves: less than that,
+    /// upwards in survival). Cost: sum over nodes of runs x their steps
+    /// (arrivals and events; at most ~2N, far fewer where grains form many
+    /// centres early).
     DevelopTable(const KineticsRates& rates, double shutter_s, const Development& dev,
                  const Options& options);
 
