@@ -10,6 +10,7 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <limits>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -91,6 +92,9 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
     const int batch = std::max(32, static_cast<int>(std::min<uint64_t>(
                                        o.min_samples, o.min_samples * uint64_t(256) / n)));
     const uint64_t stop = stop_n4(dev, o.target_standard_error);
+    // The stop's bias (P low by at most this) is part of the node's error.
+    const double stop_bias
+        = stop == std::numeric_limits<uint64_t>::max() ? 0.0 : dev.survival_probability(stop);
     for (int done = 0; done < o.max_samples;) {
         if (budget.exceeded || cancel_requested(o.cancel))
             return r;
@@ -112,9 +116,10 @@ NodeResult estimate_node(uint64_t n, const KineticsRates& rates, double shutter_
         const double v  = std::max(0.0, sum2 / done - m * m);
         // Runs that all agree still leave an unseen outcome possible: its
         // weight is about 1/done at most, so the error is never below that.
-        r.se = std::max(std::sqrt(v / done), 1.0 / done);
-        r.p  = 1.0 - m;
-        if (r.se <= o.target_standard_error)
+        const double se = std::max(std::sqrt(v / done), 1.0 / done);
+        r.se            = se + stop_bias;
+        r.p             = 1.0 - m;
+        if (se <= o.target_standard_error)
             break;
     }
     return r;

@@ -83,7 +83,8 @@ public:
     }
     uint64_t max_photons() const { return m_options.max_photons; }
     const Options& options() const { return m_options; }
-    /// Standard error of P at n: the node's at a node, the larger of the
+    /// Standard error of P at n (with the runs' stop bias added, at most a
+    /// thousandth of the target): the node's at a node, the larger of the
     /// two neighbours' between nodes.
     double standard_error(uint64_t n) const;
     /// Whether n is a node (no interpolation error there).

@@ -28,7 +28,9 @@ TEST(DevelopTable, AgreesWithIndependentRunsOfTheChain)
         o.target_standard_error = 2e-3;
         o.stream_key            = 1;
         const DevelopTable table(rates, shutter, dev, o);
-        EXPECT_LE(table.max_standard_error(), 2e-3 + 1e-12);
+        // The target, plus the bias of runs stopped once decided (at most
+        // a thousandth of the target, added to every node's error).
+        EXPECT_LE(table.max_standard_error(), 2e-3 * (1 + 1e-3) + 1e-12);
         // Independent estimate (other streams). The difference of two
         // independent estimates has sd sqrt(se1^2 + se2^2); at an
         // interpolated N add the reported interpolation error. 5 sigma.

@@ -9,8 +9,9 @@ with its fast per-grain kernel forced, fast) into DIR and checks what issues
 4 and 9 ask of the default: `auto` at its default tolerance agrees with
 `exact` within 0.003 (the kernel: 0.002) in patch-mean density and within
 3% in RMS granularity, and develops the same fraction of grains. auto is
-checked as it chooses (on these small wedges often the early-stopped chain,
-identical to exact), with its table forced (issue 4's table path) and with
+checked as it chooses (on these small wedges the early-stopped chain,
+identical to exact, or the fast kernel where its table pays: then against
+the exact decisions on the kernel's own grains, as error_report.py pairs it), with its table forced (issue 4's table path) and with
 its kernel forced (what it runs on frames large enough for a table to pay). Exits 1 and names every failed check.
 
 Tolerances come from the variance, never from a hand-picked number: each
@@ -34,7 +35,6 @@ Timing is printed, never asserted.
 """
 
 import argparse
-import functools
 import json
 import math
 import os
@@ -45,6 +45,8 @@ from statistics import NormalDist
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPORT = os.path.join(HERE, "..", "..", "tools", "perf", "error_report.py")
+sys.path.insert(0, os.path.dirname(REPORT))
+from fgstats import t975, t_quantile  # noqa: E402  (Student's t, pure Python)
 
 # Patch-mean density budgets: issue 4 held the chain and the table to
 # 0.003; issue 9 holds the fast per-grain kernel to 0.002.
@@ -58,40 +60,6 @@ THIRDS = ((0, 7), (7, 14), (14, 21))  # toe, straight part, shoulder of the wedg
 # The kernel (kinetics=curve, what auto runs where a table pays since 0.2)
 # forced as well.
 ACCEPT = ("auto", "auto, table forced", "auto, kernel forced")
-
-
-@functools.lru_cache(maxsize=None)
-def t_quantile(p, df):
-    """Quantile of Student's t (p > 0.5) by bisection on its CDF, the CDF by
-    Simpson integration of the density (no scipy on CI machines)."""
-    if df > 200:
-        return NormalDist().inv_cdf(p)
-    c = math.exp(math.lgamma((df + 1) / 2) - math.lgamma(df / 2)) / math.sqrt(df * math.pi)
-
-    def cdf(x):
-        n = 2000
-        h = x / n
-        s = 0.0
-        for i in range(n + 1):
-            t = i * h
-            w = 1 if i in (0, n) else (4 if i % 2 else 2)
-            s += w * c * (1 + t * t / df) ** (-(df + 1) / 2)
-        return 0.5 + s * h / 3
-
-    lo, hi = 0.0, 1.0
-    while cdf(hi) < p:
-        hi *= 2
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if cdf(mid) < p:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
-
-
-def t975(df):
-    return t_quantile(0.975, df)
 
 
 class Checks:

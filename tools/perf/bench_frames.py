@@ -41,6 +41,10 @@ Inputs are generated once into --cache (default ~/.cache/filmgrain-perf):
 grace_hopper.jpg (matplotlib's sample data) resized with oiiotool, and a
 procedural numpy image for the 16K frame. They are not committed.
 
+Tables: every run builds its P(develop|N) tables (FILMGRAIN_CACHE_DIR=off
+unless the environment sets it: fgperf.cli_env), so the times are a
+machine's first render of a stock; later renders read the tables from disk.
+
 Timing on a shared machine: wall time depends on the other jobs; CPU time
 (user + system of the CLI, all threads) much less. The tables give both, and
 "wall if idle" = max(CPU / threads, serial stages): what the wall time would
@@ -551,7 +555,11 @@ def main(argv=None):
             + ".", "",
             "Wall times on this shared machine are inflated by other jobs; *wall if idle* = "
             "max(CPU seconds / threads, serial read + colour + write seconds) estimates the wall "
-            "time with both cores free. Targets are judged on both; neither is asserted in CI.",
+            "time with both cores free. Targets are judged on both; neither is asserted in CI. "
+            "Tables on disk: FILMGRAIN_CACHE_DIR="
+            + os.environ.get("FILMGRAIN_CACHE_DIR", "off")
+            + " (unless set, off: every run builds its P(develop|N) tables, as a machine's "
+            "first render of a stock does; a second render reads them from disk).",
             ""]
     with open(os.path.join(args.out, "benchmarks.md"), "w") as f:
         f.write("\n".join(head + tables))

@@ -10,6 +10,12 @@ all threads) and peak resident memory (KiB); wall seconds are
 time.perf_counter around it. On a machine shared with other
 jobs the wall time depends on the load; the CPU time much less so. Neither
 is ever asserted on in CI.
+
+Tables: the CLI keeps its P(develop|N) tables on disk for the next
+process (kinetics_table.h). Measured runs do not: cli_env() sets
+FILMGRAIN_CACHE_DIR=off unless the caller's environment sets it, so every
+run pays its table builds, as a machine's first render of a stock does,
+and a run's time does not depend on which runs came before it.
 """
 
 import json
@@ -53,6 +59,14 @@ class RunResult:
 TIME = "/usr/bin/time"  # GNU time (Debian package `time`)
 
 
+def cli_env():
+    """The environment of a measured CLI run: no table cache on disk unless
+    FILMGRAIN_CACHE_DIR is set (see the module's docstring)."""
+    env = dict(os.environ)
+    env.setdefault("FILMGRAIN_CACHE_DIR", "off")
+    return env
+
+
 def run_cli(argv, timeout_s=None, stats_path=None):
     """Runs argv (the CLI and its arguments) as one child and measures it.
 
@@ -69,7 +83,8 @@ def run_cli(argv, timeout_s=None, stats_path=None):
     with tempfile.TemporaryFile() as err, tempfile.NamedTemporaryFile("r") as tf:
         t0 = time.perf_counter()
         proc = subprocess.Popen([TIME, "-f", "%e %U %S %M %x", "-o", tf.name, *argv],
-                                stdout=subprocess.DEVNULL, stderr=err, start_new_session=True)
+                                stdout=subprocess.DEVNULL, stderr=err, start_new_session=True,
+                                env=cli_env())
         deadline = None if timeout_s is None else t0 + timeout_s
         killed = False
         while True:

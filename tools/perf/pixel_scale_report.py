@@ -38,14 +38,9 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fgperf  # noqa: E402
+from fgstats import t975  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-T975 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306,
-        9: 2.262, 10: 2.228, 11: 2.201, 12: 2.179, 15: 2.131, 20: 2.086}
-
-
-def t975(df):
-    return T975.get(df, T975[max(k for k in T975 if k <= df)] if df > 1 else 12.706)
 
 
 def render(binary, mods, out, work):

@@ -109,7 +109,8 @@ def profile_case(binary, name, argv, freq, work):
     cmd = ["perf", "record", "-q", "-F", str(freq), "--call-graph", "dwarf,16384", "-o", data,
            "--", binary, *argv, "-o", out, "--stats", stats, "-q"]
     t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                   env=fgperf.cli_env())
     wall = time.perf_counter() - t0
     with open(stats) as f:
         st = json.load(f)
