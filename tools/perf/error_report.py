@@ -440,6 +440,24 @@ def merge_wedge(acc, new):
     return acc
 
 
+def granularity_ratio_ci(vp, ve):
+    """RMS granularity ratio sqrt(sum vp / sum ve) over bands (the path's
+    and the reference's aperture density variances, band by band) and its
+    95% CI. The ratio of sums is a ratio estimator: its standard error is
+    that of the mean of d = vp - R ve over the bands, divided by mean(ve)
+    (delta method), so bands that carry much of the variance (a few
+    developed grains at low density) weigh in it as they do in the ratio;
+    the spread of per-band log ratios would understate it there."""
+    n = vp.size
+    R = vp.sum() / ve.sum()
+    ratio = math.sqrt(R)
+    if n < 2:
+        return ratio, 0.0, float("inf")
+    se_R = (vp - R * ve).std(ddof=1) / math.sqrt(n) / ve.mean()
+    half = t975(n - 1) * 0.5 * se_R / R  # of log(ratio) = 0.5 log R
+    return ratio, ratio * math.exp(-half), ratio * math.exp(half)
+
+
 def summarise_wedge(acc, layer_names):
     """Per layer and step: biases with CIs, granularity ratio with CI."""
     rows = []
@@ -454,10 +472,7 @@ def summarise_wedge(acc, layer_names):
             D_exact = rec["De_sum"] / rec["n"]
             vp, ve = np.asarray(rec["var_p"]), np.asarray(rec["var_e"])
             if vp.size and np.all(ve > 0) and np.all(vp > 0):
-                ratio = math.sqrt(vp.sum() / ve.sum())
-                lr = 0.5 * np.log(vp / ve)
-                _, lci = mean_ci(lr)
-                r_lo, r_hi = ratio * math.exp(-lci), ratio * math.exp(lci)
+                ratio, r_lo, r_hi = granularity_ratio_ci(vp, ve)
                 g_exact = math.sqrt(ve.mean())
             else:
                 ratio = r_lo = r_hi = g_exact = float("nan")
@@ -711,7 +726,8 @@ def main(argv=None):
                     help="renders go here (default: $TMPDIR/filmgrain-error-report[-small])")
     ap.add_argument("--small", action="store_true", help="the small CI version")
     ap.add_argument("--scenes", default=None, help="comma-separated subset of scenes")
-    ap.add_argument("--configs", default=None, help="comma-separated subset of configurations")
+    ap.add_argument("--configs", default=None,
+                    help="subset of configurations, separated by ';' (names hold commas)")
     ap.add_argument("--seeds", default=None, help="comma-separated seeds (all scenes)")
     ap.add_argument("--threads", type=int, default=0, help="--threads of each render (0: all)")
     ap.add_argument("--reuse", action="store_true",
@@ -748,7 +764,7 @@ def main(argv=None):
     if args.small:
         configs = [c for c in configs if c.family == "engine"]
     if args.configs:
-        want = set(args.configs.split(","))
+        want = set(args.configs.split(";"))
         want |= {c.reference for c in configs if c.name in want}  # what they are compared with
         configs = [c for c in configs if c.name in want or c.name == "exact"]
     if args.extra_auto:
