@@ -11,8 +11,9 @@ with its fast per-grain kernel forced, fast) into DIR and checks what issues
 3% in RMS granularity, and develops the same fraction of grains. auto is
 checked as it chooses (on these small wedges the early-stopped chain,
 identical to exact, or the fast kernel where its table pays: then against
-the exact decisions on the kernel's own grains, as error_report.py pairs it), with its table forced (issue 4's table path) and with
-its kernel forced (what it runs on frames large enough for a table to pay). Exits 1 and names every failed check.
+the exact decisions on the kernel's own grains, as error_report.py pairs
+it), with its table forced (issue 4's table path) and with its kernel
+forced (what it runs on frames large enough for a table to pay). Exits 1 and names every failed check.
 
 Tolerances come from the variance, never from a hand-picked number: each
 check is "the measured difference is within the allowed error (0.003 or
@@ -162,7 +163,8 @@ def main():
               f"({worst[1]}) <= {MAX_DETECTABLE}")
 
     # 4. Granularity per step (steps without clamped apertures, >= 3 bands):
-    #    |log ratio| <= log 1.03 + t * se of the log ratio over bands.
+    #    |log ratio| <= log 1.03 + t * se of the log ratio (error_report's
+    #    ratio-estimator CI over bands, granularity_ratio_ci).
     gsteps = [r for r in steps if not r["clamped_apertures"] and r["g_bands"] >= 3
               and r["g_ratio"] == r["g_ratio"]]
     p_g = 1 - FAMILY_ALPHA / (2 * max(1, len(gsteps)))

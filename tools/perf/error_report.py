@@ -625,7 +625,8 @@ def verdict_density(rows):
 
 def verdict_granularity(rows):
     """The same for the RMS granularity ratio against 1 +- 0.03, its CI
-    (log ratio over bands of apertures) widened the same way."""
+    (granularity_ratio_ci, symmetric in the log ratio) widened the same
+    way."""
     counts = {"within": 0, "unresolved": 0, "outside": 0, "n/a": 0}
     lo_lim, hi_lim = 1 - TOLERANCE_GRANULARITY, 1 + TOLERANCE_GRANULARITY
     valid = [r for r in rows if r["g_ratio"] == r["g_ratio"] and not r["clamped_apertures"]]
