@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "rng.h"
 
@@ -59,5 +60,22 @@ LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
                                   uint64_t* events     = nullptr,
                                   uint64_t stop_at_n4 = std::numeric_limits<uint64_t>::max(),
                                   uint64_t* arrivals  = nullptr);
+
+/// The same chain, sampled another way for the P(develop | N) tables
+/// (kinetics_table.h), where only the law of the outcome matters: equal in
+/// distribution to simulate_latent_image (a different stream use, so not
+/// the same outcome for the same stream). Arrival times are the partial
+/// sums of n + 1 exponential spacings scaled to the shutter (the order
+/// statistics of n uniforms), and the next event comes when the total
+/// propensity integrated since the last event reaches an exponential clock
+/// (the propensity is constant between arrivals and events). One logarithm
+/// per photon and one per event, against three transcendental calls per
+/// photon in simulate_latent_image. `spacings` is scratch (n + 1 values).
+/// Every photon's spacing is drawn up front, so a run stopped early
+/// (stop_at_n4) still costs n draws.
+LatentImage sample_latent_image_by_spacings(
+    uint64_t absorbed_photons, double shutter_s, const KineticsRates& rates, Rng& rng,
+    std::vector<double>& spacings, uint64_t* events = nullptr,
+    uint64_t stop_at_n4 = std::numeric_limits<uint64_t>::max());
 
 }  // namespace filmgrain

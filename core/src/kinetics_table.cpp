@@ -47,15 +47,17 @@ uint64_t stop_n4(const Development& dev, double target_standard_error)
 }
 
 /// One run of the chain for n photons on its own stream (key, salt, n,
-/// run): its survival probability and the steps it took (events and
-/// arrivals).
+/// run): its survival probability and the steps it took (events, and the
+/// n photons' spacings, all drawn up front).
 double survival_run(uint64_t n, uint64_t key, uint64_t salt, uint64_t run,
                     const KineticsRates& rates, double shutter_s, const Development& dev,
                     uint64_t stop, uint64_t& events, uint64_t& arrivals)
 {
+    thread_local std::vector<double> spacings;
     Rng rng(hash_ids(key, salt, n, run), Stage::kinetics);
     const LatentImage c
-        = simulate_latent_image(n, shutter_s, rates, rng, &events, stop, &arrivals);
+        = sample_latent_image_by_spacings(n, shutter_s, rates, rng, spacings, &events, stop);
+    arrivals = n;
     return dev.survival_probability(c.n4);
 }
 

@@ -6,9 +6,11 @@
 // population whose rates do not depend on grain area (rate_area_exponent =
 // 0) the probability that a grain with N photons develops is then one
 // function P(N), the same for every grain of the scene. The table samples
-// it once per scene by running the exact chain (MODEL.md 3) many times per
-// node, and grains draw their outcome from it: equal in distribution to the
-// exact engine up to the table's own error, which it reports.
+// it once per scene by running the chain (MODEL.md 3) many times per node
+// (sample_latent_image_by_spacings: the exact engine's law, sampled with
+// fewer transcendental calls), and grains draw their outcome from it: equal
+// in distribution to the exact engine up to the table's own error, which
+// it reports.
 #pragma once
 
 #include <cstdint>
@@ -60,8 +62,8 @@ public:
     /// many development centres that its survival is below a thousandth of
     /// the target standard error (the bias that leaves: less than that,
     /// upwards in survival). Cost: sum over nodes of runs x their steps
-    /// (arrivals and events; at most ~2N, far fewer where grains form many
-    /// centres early).
+    /// (the N photons' arrival spacings, all drawn up front, and the chain
+    /// events, fewer where grains form many centres early: at most ~2N).
     DevelopTable(const KineticsRates& rates, double shutter_s, const Development& dev,
                  const Options& options);
 
