@@ -69,8 +69,9 @@ LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
 /// statistics of n uniforms), and the next event comes when the total
 /// propensity integrated since the last event reaches an exponential clock
 /// (the propensity is constant between arrivals and events). One logarithm
-/// per photon and one per event, against three transcendental calls per
-/// photon in simulate_latent_image. `spacings` is scratch (n + 1 values).
+/// per photon and one per event, where simulate_latent_image takes a log
+/// and an expm1 per photon and a log per photon or event that meets free
+/// electrons. `spacings` is scratch (n + 1 values).
 /// Every photon's spacing is drawn up front, so a run stopped early
 /// (stop_at_n4) still costs n draws.
 LatentImage sample_latent_image_by_spacings(
