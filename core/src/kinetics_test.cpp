@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "rng.h"
+#include "test_render.h"  // mean_and_standard_error
 
 namespace filmgrain {
 namespace {
@@ -123,7 +124,7 @@ TEST(Kinetics, SpacingsSamplerHasTheExactChainsLaw)
     // simulate_latent_image (the exact engine's) on independent streams:
     // P(n4 >= 1), P(n4 >= 2) and the mean n2, n3, n4 of 20000 runs each.
     // Each difference is compared with its standard error from the two
-    // samples' variances (sqrt(v_a / R + v_b / R)); |z| <= 5 has a false
+    // samples' standard errors (their hypotenuse); |z| <= 5 has a false
     // alarm rate of 6e-7 per comparison, 2e-5 over the 30 below. Regimes
     // where arrival timing decides the outcome: the paper's rates, events
     // as fast as arrivals (k t ~ 1), a 1 us shutter (all photons at once:
@@ -148,38 +149,32 @@ TEST(Kinetics, SpacingsSamplerHasTheExactChainsLaw)
     std::vector<double> spacings;
     for (size_t k = 0; k < cases.size(); ++k) {
         const Case& cs = cases[k];
-        // Per run: n4 >= 1, n4 >= 2, n2, n3, n4.
-        double sum[2][5] = {}, sum2[2][5] = {};
+        // Per sampler and run: n4 >= 1, n4 >= 2, n2, n3, n4.
+        std::vector<double> x[2][5];
         for (int r = 0; r < kRuns; ++r) {
             Rng a(hash_ids(0xa11, k, r), Stage::kinetics);
             Rng b(hash_ids(0xb22, k, r), Stage::kinetics);
-            const LatentImage ca = simulate_latent_image(cs.n, cs.shutter_s, cs.rates, a);
-            const LatentImage cb
-                = sample_latent_image_by_spacings(cs.n, cs.shutter_s, cs.rates, b, spacings);
-            int s = 0;
-            for (const LatentImage& c : { ca, cb }) {
-                const double x[5] = { c.n4 >= 1 ? 1.0 : 0.0, c.n4 >= 2 ? 1.0 : 0.0,
-                                      static_cast<double>(c.n2), static_cast<double>(c.n3),
-                                      static_cast<double>(c.n4) };
-                for (int q = 0; q < 5; ++q) {
-                    sum[s][q] += x[q];
-                    sum2[s][q] += x[q] * x[q];
-                }
-                ++s;
+            const LatentImage c[2] = {
+                simulate_latent_image(cs.n, cs.shutter_s, cs.rates, a),
+                sample_latent_image_by_spacings(cs.n, cs.shutter_s, cs.rates, b, spacings)
+            };
+            for (int s = 0; s < 2; ++s) {
+                x[s][0].push_back(c[s].n4 >= 1 ? 1.0 : 0.0);
+                x[s][1].push_back(c[s].n4 >= 2 ? 1.0 : 0.0);
+                x[s][2].push_back(static_cast<double>(c[s].n2));
+                x[s][3].push_back(static_cast<double>(c[s].n3));
+                x[s][4].push_back(static_cast<double>(c[s].n4));
             }
         }
         for (int q = 0; q < 5; ++q) {
-            double m[2], v[2];
-            for (int s = 0; s < 2; ++s) {
-                m[s] = sum[s][q] / kRuns;
-                v[s] = std::max(0.0, sum2[s][q] / kRuns - m[s] * m[s]);
-            }
-            const double se = std::sqrt((v[0] + v[1]) / kRuns);
+            const auto [m0, se0] = mean_and_standard_error(x[0][q]);
+            const auto [m1, se1] = mean_and_standard_error(x[1][q]);
+            const double se      = std::hypot(se0, se1);
             SCOPED_TRACE("case " + std::to_string(k) + ", statistic " + std::to_string(q));
             if (se == 0.0)
-                EXPECT_EQ(m[0], m[1]);  // both samplers deterministic here
+                EXPECT_EQ(m0, m1);  // both samplers deterministic here
             else
-                EXPECT_LE(std::fabs(m[0] - m[1]) / se, 5.0) << m[0] << " vs " << m[1];
+                EXPECT_LE(std::fabs(m0 - m1) / se, 5.0) << m0 << " vs " << m1;
         }
     }
 }
