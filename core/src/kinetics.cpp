@@ -79,14 +79,14 @@ LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
     // computed with expm1 so that it stays exact for millions of photons.
     // Waiting times are subtracted from the (small) gap, never added to a
     // (large) t, so event ordering survives any shutter length.
-    double t            = 0.0;  // time of the last arrival
-    double next_arrival = 0.0;
-    double gap          = 0.0;  // next_arrival minus the current time
+    double t_s            = 0.0;  // time of the last arrival
+    double next_arrival_s = 0.0;
+    double gap_s          = 0.0;  // next arrival minus the current time
     const auto draw_arrival = [&]() {
         const double u = rng.uniform_open0();
         const double f = -std::expm1(std::log(u) / static_cast<double>(remaining));
-        gap            = (shutter_s - t) * f;
-        next_arrival   = t + gap;
+        gap_s          = (shutter_s - t_s) * f;
+        next_arrival_s = t_s + gap_s;
     };
     if (remaining > 0)
         draw_arrival();
@@ -97,13 +97,13 @@ LatentImage simulate_latent_image(uint64_t absorbed_photons, double shutter_s,
             // Does the next chain event come before the next photon?
             bool arrival = s.total <= 0.0;
             if (!arrival) {
-                const double wait = -std::log(rng.uniform_open0()) / s.total;
-                arrival           = wait >= gap;
+                const double wait_s = -std::log(rng.uniform_open0()) / s.total;
+                arrival             = wait_s >= gap_s;
                 if (!arrival)
-                    gap -= wait;
+                    gap_s -= wait_s;
             }
             if (arrival) {
-                t = next_arrival;
+                t_s = next_arrival_s;
                 ++s.e;
                 --remaining;
                 if (remaining > 0)
@@ -137,35 +137,35 @@ LatentImage sample_latent_image_by_spacings(uint64_t absorbed_photons, double sh
     const uint64_t n = absorbed_photons;
     // The order statistics of n uniforms on [0, shutter] are the partial
     // sums of n + 1 standard exponential spacings, scaled to sum to the
-    // shutter: arrival k comes spacings[k] * scale after arrival k - 1.
+    // shutter: arrival k comes spacings[k] * s_per_spacing after arrival k - 1.
     spacings.resize(static_cast<size_t>(n) + 1);
     double sum = 0.0;
     for (double& x : spacings) {
         x = -std::log(rng.uniform_open0());
         sum += x;
     }
-    const double scale = shutter_s / sum;
+    const double s_per_spacing = shutter_s / sum;
     // The next event comes when the propensity integrated over time since
     // the last event reaches `clock`, a standard exponential (the total
     // propensity is constant between arrivals and events): one draw per
     // event, none per arrival.
-    double clock     = -std::log(rng.uniform_open0());
-    uint64_t arrived = 0;
-    double gap       = n > 0 ? spacings[0] * scale : 0.0;  // to the next arrival, s
+    double clock      = -std::log(rng.uniform_open0());
+    uint64_t arrived  = 0;
+    double gap_s      = n > 0 ? spacings[0] * s_per_spacing : 0.0;  // to the next arrival
     uint64_t n_events = 0;
     for (;;) {
         s.update_propensities(rates);
         if (arrived < n) {
-            const double hazard = s.total * gap;
+            const double hazard = s.total * gap_s;
             if (clock >= hazard) {
                 clock -= hazard;
                 ++s.e;
                 ++arrived;
                 if (arrived < n)
-                    gap = spacings[static_cast<size_t>(arrived)] * scale;
+                    gap_s = spacings[static_cast<size_t>(arrived)] * s_per_spacing;
                 continue;
             }
-            gap   = std::max(0.0, gap - clock / s.total);
+            gap_s = std::max(0.0, gap_s - clock / s.total);
             clock = -std::log(rng.uniform_open0());
         } else if (s.total <= 0.0) {
             break;
