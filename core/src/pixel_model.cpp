@@ -331,16 +331,31 @@ double copula_filter(const LagArray& rho, int lags, LagArray& f)
     };
     // Power spectrum of the symmetric correlation on the lags kept
     // (a cosine transform: rho is even in each axis), its square root, and
-    // back to the filter's lags.
+    // back to the filter's lags. Both transforms are separable: one axis,
+    // then the other.
+    std::array<double, kGrid * kLagSide> half {};  // [u][j]: the sum over i
+    for (int u = 0; u < kGrid; ++u)
+        for (int j = 0; j <= lags; ++j) {
+            double s = 0.0;
+            for (int i = 0; i <= lags; ++i)
+                s += multiplicity(i) * at(rho, i, j) * cosine(u, i);
+            half[static_cast<size_t>(u * kLagSide + j)] = s;
+        }
     std::vector<double> root(kGrid * kGrid);
     for (int v = 0; v < kGrid; ++v)
         for (int u = 0; u < kGrid; ++u) {
             double s = 0.0;
             for (int j = 0; j <= lags; ++j)
-                for (int i = 0; i <= lags; ++i)
-                    s += multiplicity(i) * multiplicity(j) * at(rho, i, j) * cosine(u, i)
-                         * cosine(v, j);
+                s += multiplicity(j) * half[static_cast<size_t>(u * kLagSide + j)] * cosine(v, j);
             root[static_cast<size_t>(v * kGrid + u)] = std::sqrt(std::max(0.0, s));
+        }
+    std::array<double, kGrid * kLagSide> back {};  // [v][i]: the sum over u
+    for (int v = 0; v < kGrid; ++v)
+        for (int i = 0; i <= support; ++i) {
+            double s = 0.0;
+            for (int u = 0; u < kGrid; ++u)
+                s += root[static_cast<size_t>(v * kGrid + u)] * cosine(u, i);
+            back[static_cast<size_t>(v * kLagSide + i)] = s;
         }
     f.fill(0.0);
     double norm = 0.0;
@@ -348,8 +363,7 @@ double copula_filter(const LagArray& rho, int lags, LagArray& f)
         for (int i = 0; i <= support; ++i) {
             double s = 0.0;
             for (int v = 0; v < kGrid; ++v)
-                for (int u = 0; u < kGrid; ++u)
-                    s += root[static_cast<size_t>(v * kGrid + u)] * cosine(u, i) * cosine(v, j);
+                s += back[static_cast<size_t>(v * kLagSide + i)] * cosine(v, j);
             s /= kGrid * kGrid;
             f[static_cast<size_t>(j * kLagSide + i)] = s;
             norm += multiplicity(i) * multiplicity(j) * s * s;
