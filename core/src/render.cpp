@@ -803,14 +803,18 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (Status s = plan_stoppably(stock, scene, input, frame, roi, settings, plan); !s)
             return s;
 
-        // Tiles hold at most kGrainsPerTile grains (all layers) whatever
-        // the pixel size: memory follows the tile's work, every thread gets
-        // tiles, and a stop is seen within a tile (render_tile checks it
-        // every few thousand grains). Speed only: never the output.
+        // Tiles hold at most kGrainsPerTile grains (all layers that
+        // generate grains: a layer at pixel scale has none, its work is per
+        // pixel) whatever the pixel size: memory follows the tile's work,
+        // every thread gets tiles, and a stop is seen within a tile
+        // (render_tile checks it every few thousand grains). Speed only:
+        // never the output.
         double grains_per_px = 0.0;
-        for (const Layer& layer : stock.layers)
-            for (const Population& pop : layer.populations)
-                grains_per_px += pop.grains_per_um2 * frame.scan_pitch_x_um * frame.scan_pitch_y_um;
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            if (!plan[l].pixel_model)
+                for (const Population& pop : stock.layers[l].populations)
+                    grains_per_px
+                        += pop.grains_per_um2 * frame.scan_pitch_x_um * frame.scan_pitch_y_um;
         constexpr double kGrainsPerTile = 1 << 18;
         const int64_t ts = std::clamp<int64_t>(
             static_cast<int64_t>(std::sqrt(kGrainsPerTile / std::max(grains_per_px, 1e-300))), 1,
