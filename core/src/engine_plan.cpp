@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <sstream>
 
 #include "dye.h"
@@ -199,6 +200,74 @@ double raster_bias(int rows, double pitch_um, double smallest_radius_um)
     return 0.52 * std::pow(rows_per_radius, -2.3);
 }
 
+/// shared_pixel_model's models, by key, oldest first.
+struct PixelModelCache {
+    std::mutex mutex;
+    std::vector<std::pair<std::string, std::shared_ptr<const PixelModel>>> models;
+};
+PixelModelCache& pixel_model_cache()
+{
+    static PixelModelCache cache;
+    return cache;
+}
+
+/// The layer's pixel model (PixelModel's arguments), built once per
+/// process for the same arguments: a sequence's frames share it, as they
+/// share their tables. It depends on the stock, scene and scan, never on
+/// the pixels, and is the same for any thread count, so a model from the
+/// cache is the one a new build would give. Keyed by the bytes of every
+/// value the build reads (each population's size law, density and photons
+/// per value, its table's serialization and its curve's extent, the image,
+/// the pitch, the log-factor range and the density clamp), compared in
+/// full. Holds the last kCachedPixelModels (0.2 MB each without
+/// inhibition, ~5 MB with VISION3 500T's 27 log-factor rows).
+std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopulation>& pops,
+                                                     double px_um, double py_um,
+                                                     const Layer& layer,
+                                                     const ImageOverlap& image,
+                                                     double max_log_factor, int nthreads,
+                                                     double max_density)
+{
+    constexpr size_t kCachedPixelModels = 8;
+    std::string key;
+    const auto put = [&key](auto v) {
+        key.append(reinterpret_cast<const char*>(&v), sizeof(v));
+    };
+    put(px_um);
+    put(py_um);
+    put(max_log_factor);
+    put(max_density);
+    put(static_cast<int>(layer.image));
+    put(static_cast<int>(layer.cloud_profile));
+    put(layer.cloud_diameter_ratio);
+    put(layer.cloud_density);
+    for (const PixelPopulation& p : pops) {
+        put(p.population->grains_per_um2);
+        put(p.population->diameter_um);
+        put(p.population->diameter_log_sigma);
+        put(p.photons_per_value_um2);
+        put(p.curve->lambda_max());
+        put(p.curve->node_count());
+        const std::string table = p.table->serialize();
+        put(table.size());
+        key += table;
+    }
+    PixelModelCache& cache = pixel_model_cache();
+    {
+        std::lock_guard<std::mutex> lock(cache.mutex);
+        for (const auto& [k, model] : cache.models)
+            if (k == key)
+                return model;
+    }
+    auto model = std::make_shared<const PixelModel>(pops, px_um, py_um, image, max_log_factor,
+                                                    nthreads, max_density);
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    if (cache.models.size() >= kCachedPixelModels)
+        cache.models.erase(cache.models.begin());
+    cache.models.emplace_back(std::move(key), model);
+    return model;
+}
+
 /// Whether every population of a layer runs the fast kernel's curve.
 bool all_curves(const LayerPlan& plan)
 {
@@ -227,6 +296,15 @@ ImageView spread_view(const std::vector<float>& values, const ImageView& input)
 }
 
 }  // namespace
+
+size_t clear_pixel_model_cache()
+{
+    PixelModelCache& cache = pixel_model_cache();
+    std::lock_guard<std::mutex> lock(cache.mutex);
+    const size_t n = cache.models.size();
+    cache.models.clear();
+    return n;
+}
 
 InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
                          double margin_um)
@@ -674,10 +752,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         // factor too, up to the stock's bound on it.
         const double max_log_factor
             = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
-        auto model = std::make_shared<const PixelModel>(pops, frame.scan_pitch_x_um,
-                                                        frame.scan_pitch_y_um, image,
-                                                        max_log_factor, settings.nthreads,
-                                                        stock.max_density);
+        auto model = shared_pixel_model(pops, frame.scan_pitch_x_um, frame.scan_pitch_y_um,
+                                        layer, image, max_log_factor, settings.nthreads,
+                                        stock.max_density);
         plan.setup_seconds
             += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (cancelled())

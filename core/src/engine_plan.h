@@ -72,6 +72,11 @@ struct LayerPlan {
     int dye_samples    = 0;
 };
 
+/// Empties the process's cache of pixel models (plan_layers builds a
+/// layer's PixelModel once per process for the same stock, scene and scan;
+/// frames of a sequence share it). Returns how many it held. For tests.
+size_t clear_pixel_model_cache();
+
 /// Decides the paths for every layer and builds what they need. `roi` is
 /// the scan region that will be rendered (tables cover the photon counts
 /// the input region under it can produce). `cancel` (optional), set by

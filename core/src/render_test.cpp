@@ -11,6 +11,7 @@
 
 #include "filmgrain/expected_curve.h"
 #include "filmgrain/wedge.h"
+#include "engine_plan.h"
 #include "test_render.h"
 
 namespace filmgrain {
@@ -302,6 +303,97 @@ TEST(Render, ZeroExposureDevelopsFogOnly)
         // Binomial(grains, f): 5 sigma.
         const double n = static_cast<double>(l.grains);
         EXPECT_NEAR(l.developed / n, f, 5 * std::sqrt(f * (1 - f) / n));
+    }
+}
+
+TEST(Render, PixelModelsFromTheCacheAreTheRendersOwn)
+{
+    // plan_layers keeps a layer's pixel model for the next render with the
+    // same stock, scene and scan (a sequence's frames). Each variant below
+    // changes one thing layer R's model is made of; rendered right after
+    // the scene it differs from (whose models are then cached), it must
+    // give the bits it gives with an empty cache, and so must that scene
+    // after it, with the same statistics (the model's errors are in the
+    // reason and the error estimate). A key that left the changed value out
+    // would hand the variant the other scene's model.
+    RenderSettings settings;
+    settings.scale = ScaleMethod::pixel;
+    const TestScene base = small_scene();
+    const auto dye = [](TestScene& v) {
+        v.stock.layers[0].image                = LayerImage::dye;
+        v.stock.layers[0].cloud_profile        = CloudProfile::gaussian;
+        v.stock.layers[0].cloud_diameter_ratio = 1.5;
+        v.stock.layers[0].cloud_density        = 0.5;
+    };
+    TestScene dyed = base;
+    dye(dyed);
+    const auto inhibit = [](TestScene& v, double strength) {
+        v.stock.inhibition.assign(3, std::vector<double>(3, 0.0));
+        v.stock.inhibition[0][0]       = strength;
+        v.stock.inhibitor_diffusion_um = 10.0;
+    };
+    TestScene inhibited = base;
+    inhibit(inhibited, 0.3);
+    struct Variant {
+        const char* name;
+        const TestScene* from;
+        TestScene scene;
+    };
+    std::vector<Variant> variants;
+    const auto add = [&](const char* name, const TestScene& from, auto change) {
+        TestScene v = from;
+        change(v);
+        v.view = ImageView { v.pixels.data(), base.view.width, base.view.height, 3 };
+        variants.push_back({ name, &from, std::move(v) });
+    };
+    add("diameter", base, [](TestScene& v) { v.stock.layers[0].populations[0].diameter_um *= 1.1; });
+    add("log sigma", base,
+        [](TestScene& v) { v.stock.layers[0].populations[0].diameter_log_sigma *= 1.2; });
+    add("grains", base,
+        [](TestScene& v) { v.stock.layers[0].populations[1].grains_per_um2 *= 1.25; });
+    add("quantum efficiency", base,
+        [](TestScene& v) { v.stock.layers[0].populations[0].quantum_efficiency *= 1.5; });
+    add("rates (table)", base,
+        [](TestScene& v) { v.stock.layers[0].populations[0].k_loss_per_s *= 1e4; });
+    add("frame width (pitch)", base, [](TestScene& v) { v.scene.frame_width_mm = 1.3; });
+    add("max density", base, [](TestScene& v) { v.stock.max_density = 0.4; });
+    add("inhibition", base, [&](TestScene& v) { inhibit(v, 0.3); });
+    add("inhibition strength", inhibited, [&](TestScene& v) { inhibit(v, 0.6); });
+    add("dye", base, [](TestScene& v) { v.stock.layers[0].image = LayerImage::dye; });
+    add("cloud density", dyed, [](TestScene& v) { v.stock.layers[0].cloud_density = 0.6; });
+    add("cloud ratio", dyed, [](TestScene& v) { v.stock.layers[0].cloud_diameter_ratio = 1.7; });
+    add("cloud profile", dyed,
+        [](TestScene& v) { v.stock.layers[0].cloud_profile = CloudProfile::disc; });
+
+    clear_pixel_model_cache();
+    const std::vector<float> base_fresh = render_scene(base, settings);
+    const size_t built = clear_pixel_model_cache();  // one: the three layers are alike
+    EXPECT_GE(built, 1u);
+    render_scene(base, settings);
+    render_scene(base, settings);
+    EXPECT_EQ(clear_pixel_model_cache(), built)
+        << "the second render of the same scene takes the first's models";
+    const auto same_stats = [](const RenderStats& a, const RenderStats& b) {
+        for (size_t l = 0; l < a.layers.size(); ++l)
+            if (a.layers[l].path != b.layers[l].path || a.layers[l].reason != b.layers[l].reason
+                || a.layers[l].error_estimate != b.layers[l].error_estimate)
+                return false;
+        return a.layers.size() == b.layers.size();
+    };
+    for (const Variant& v : variants) {
+        RenderStats from_stats, stats, again;
+        clear_pixel_model_cache();
+        const std::vector<float> from_fresh = render_scene(*v.from, settings, &from_stats);
+        clear_pixel_model_cache();
+        const std::vector<float> fresh = render_scene(v.scene, settings, &stats);
+        ASSERT_FALSE(bit_identical(fresh, from_fresh) && same_stats(stats, from_stats))
+            << v.name << ": not a variant";
+        clear_pixel_model_cache();
+        render_scene(*v.from, settings);
+        EXPECT_TRUE(bit_identical(render_scene(v.scene, settings, &again), fresh)) << v.name;
+        EXPECT_TRUE(same_stats(again, stats)) << v.name;
+        EXPECT_TRUE(bit_identical(render_scene(*v.from, settings, &again), from_fresh)) << v.name;
+        EXPECT_TRUE(same_stats(again, from_stats)) << v.name;
     }
 }
 
