@@ -816,9 +816,11 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
                     grains_per_px
                         += pop.grains_per_um2 * frame.scan_pitch_x_um * frame.scan_pitch_y_um;
         constexpr double kGrainsPerTile = 1 << 18;
-        const int64_t ts = std::clamp<int64_t>(
-            static_cast<int64_t>(std::sqrt(kGrainsPerTile / std::max(grains_per_px, 1e-300))), 1,
-            settings.tile_size_px);
+        // (Clamped as a double: with every layer at pixel scale the side is
+        // unbounded, beyond what an int64_t holds.)
+        const int64_t ts = static_cast<int64_t>(
+            std::clamp(std::sqrt(kGrainsPerTile / std::max(grains_per_px, 1e-300)), 1.0,
+                       static_cast<double>(settings.tile_size_px)));
         const int64_t ntx = (roi.width() + ts - 1) / ts, nty = (roi.height() + ts - 1) / ts;
         const int64_t ntiles = ntx * nty;
 
