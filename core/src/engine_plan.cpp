@@ -6,13 +6,13 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <sstream>
 
 #include "dye.h"
 #include "inhibition.h"
 #include "light_spread.h"
 #include "parallel.h"
+#include "process_cache.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -200,14 +200,11 @@ double raster_bias(int rows, double pitch_um, double smallest_radius_um)
     return 0.52 * std::pow(rows_per_radius, -2.3);
 }
 
-/// shared_pixel_model's models, by key, oldest first.
-struct PixelModelCache {
-    std::mutex mutex;
-    std::vector<std::pair<std::string, std::shared_ptr<const PixelModel>>> models;
-};
-PixelModelCache& pixel_model_cache()
+/// shared_pixel_model's models (0.2 MB each without inhibition, ~5 MB with
+/// VISION3 500T's 27 log-factor rows).
+ProcessCache<std::string, PixelModel>& pixel_model_cache()
 {
-    static PixelModelCache cache;
+    static ProcessCache<std::string, PixelModel> cache(8);
     return cache;
 }
 
@@ -219,8 +216,7 @@ PixelModelCache& pixel_model_cache()
 /// value the build reads (each population's size law, density and photons
 /// per value, its table's serialization and its curve's extent, the image,
 /// the pitch, the log-factor range and the density clamp), compared in
-/// full. Holds the last kCachedPixelModels (0.2 MB each without
-/// inhibition, ~5 MB with VISION3 500T's 27 log-factor rows).
+/// full.
 std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopulation>& pops,
                                                      double px_um, double py_um,
                                                      const Layer& layer,
@@ -228,7 +224,6 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
                                                      double max_log_factor, int nthreads,
                                                      double max_density)
 {
-    constexpr size_t kCachedPixelModels = 8;
     std::string key;
     const auto put = [&key](auto v) {
         key.append(reinterpret_cast<const char*>(&v), sizeof(v));
@@ -252,19 +247,11 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
         put(table.size());
         key += table;
     }
-    PixelModelCache& cache = pixel_model_cache();
-    {
-        std::lock_guard<std::mutex> lock(cache.mutex);
-        for (const auto& [k, model] : cache.models)
-            if (k == key)
-                return model;
-    }
+    if (std::shared_ptr<const PixelModel> kept = pixel_model_cache().find(key))
+        return kept;
     auto model = std::make_shared<const PixelModel>(pops, px_um, py_um, image, max_log_factor,
                                                     nthreads, max_density);
-    std::lock_guard<std::mutex> lock(cache.mutex);
-    if (cache.models.size() >= kCachedPixelModels)
-        cache.models.erase(cache.models.begin());
-    cache.models.emplace_back(std::move(key), model);
+    pixel_model_cache().put(std::move(key), model);
     return model;
 }
 
@@ -297,14 +284,7 @@ ImageView spread_view(const std::vector<float>& values, const ImageView& input)
 
 }  // namespace
 
-size_t clear_pixel_model_cache()
-{
-    PixelModelCache& cache = pixel_model_cache();
-    std::lock_guard<std::mutex> lock(cache.mutex);
-    const size_t n = cache.models.size();
-    cache.models.clear();
-    return n;
-}
+size_t clear_pixel_model_cache() { return pixel_model_cache().clear(); }
 
 InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
                          double margin_um)

@@ -11,7 +11,6 @@
 #include <functional>
 #include <iterator>
 #include <limits>
-#include <mutex>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -22,6 +21,7 @@
 #include <unistd.h>
 
 #include "parallel.h"
+#include "process_cache.h"
 #include "rng.h"
 
 namespace filmgrain {
@@ -504,14 +504,9 @@ std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& ra
                     options.max_photons,  options.target_standard_error, options.min_samples,
                     options.max_samples,  options.dense_photons,        options.node_ratio,
                     options.coarse_photons, options.coarse_ratio,       options.stream_key };
-    static std::mutex mutex;
-    static std::vector<std::pair<Key, std::shared_ptr<const DevelopTable>>> cache;
-    {
-        std::lock_guard<std::mutex> lock(mutex);
-        for (const auto& [k, t] : cache)
-            if (k == key)
-                return t;
-    }
+    static ProcessCache<Key, DevelopTable> cache(16);
+    if (std::shared_ptr<const DevelopTable> kept = cache.find(key))
+        return kept;
     std::shared_ptr<const DevelopTable> table = read_cached_table(rates, shutter_s, dev, options);
     if (!table) {
         table = std::make_shared<const DevelopTable>(rates, shutter_s, dev, options);
@@ -519,11 +514,7 @@ std::shared_ptr<const DevelopTable> shared_develop_table(const KineticsRates& ra
             return table;  // over its budget or cancelled: unfinished, never kept
         write_cached_table(rates, shutter_s, dev, *table);
     }
-    std::lock_guard<std::mutex> lock(mutex);
-    constexpr size_t kEntries = 16;
-    if (cache.size() >= kEntries)
-        cache.erase(cache.begin());
-    cache.emplace_back(key, table);
+    cache.put(key, table);
     return table;
 }
 
