@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -364,11 +365,71 @@ template<bool kRound> inline double floor_d(double v)
         return static_cast<double>(floor_i64(v));
 }
 
+/// Four words of a sample row, as one vector (the compiler's generic
+/// vectors: two SSE2 registers in the portable build, one in the AVX2 one).
+typedef uint64_t Words4 __attribute__((vector_size(32)));
+
+/// Masks of a run of sample points within a window of four words that
+/// starts at the word of the run's first point: `last[d]` has the window's
+/// bits 0..d (d: the run's last point relative to the window's first bit),
+/// `first[s]` every bit from s of the first word and all of the others (s:
+/// the run's first point within its word). A run's window mask is
+/// last[d] & first[s]: words past the run's last get 0.
+struct RunMasks {
+    uint64_t last[256][4];
+    uint64_t first[64][4];
+};
+constexpr RunMasks make_run_masks()
+{
+    RunMasks m {};
+    for (int d = 0; d < 256; ++d)
+        for (int w = 0; w < 4; ++w) {
+            const int top = d - 64 * w;  // the run's last bit within word w
+            m.last[d][w] = top < 0 ? 0 : top >= 63 ? ~uint64_t(0) : ~uint64_t(0) >> (63 - top);
+        }
+    for (int s = 0; s < 64; ++s)
+        for (int w = 0; w < 4; ++w)
+            m.first[s][w] = w == 0 ? ~uint64_t(0) << s : ~uint64_t(0);
+    return m;
+}
+constexpr RunMasks kRunMasks = make_run_masks();
+
+/// The widest run (last point minus first) that a four-word window holds
+/// from any first point within its word: 255 - 63.
+constexpr int64_t kWindowRun = 192;
+
+/// Two words of a sample row, as one vector.
+typedef uint64_t Words2 __attribute__((vector_size(16)));
+
+/// ORs each row's run of points [lo[i], hi[i]] (relative to the rows' first
+/// column; empty where hi < lo) into rows row, row + tw, ...: a window of
+/// `Words` from the run's first word, which must hold the run (at most 64
+/// points for two words, kWindowRun for four).
+template<typename Words>
+[[gnu::always_inline]] inline void or_runs(const double* lo, const double* hi, int n,
+                                           uint64_t* row, int64_t tw)
+{
+    for (int i = 0; i < n; ++i, row += tw) {
+        const int64_t ka = static_cast<int64_t>(lo[i]);
+        const int64_t kb = static_cast<int64_t>(hi[i]);
+        if (kb < ka)
+            continue;
+        const int64_t wa = ka >> 6;
+        Words last, first, words;
+        std::memcpy(&last, kRunMasks.last[kb - (wa << 6)], sizeof last);
+        std::memcpy(&first, kRunMasks.first[ka & 63], sizeof first);
+        std::memcpy(&words, row + wa, sizeof words);
+        words |= last & first;
+        std::memcpy(row + wa, &words, sizeof words);
+    }
+}
+
 /// The bits of raster_coverage: every disc's run of sample points on every
 /// sample row it crosses, ORed into `bits` (`tw` words per sample row, the
-/// block's first sample column gx0 and row gy0 as global indices). Built
-/// once per instruction set (below); bit-identical builds: the arithmetic is
-/// the same IEEE operations in the same order (no contraction into FMA).
+/// block's first sample column gx0 and row gy0 as global indices; three
+/// words of padding after the last row). Built once per instruction set
+/// (below); bit-identical builds: the arithmetic is the same IEEE
+/// operations in the same order (no contraction into FMA).
 template<bool kRound>
 [[gnu::always_inline]] inline void raster_discs(const std::vector<Disc>& discs, int64_t tw,
                                                 int64_t rows, int64_t gx0, int64_t gy0,
@@ -408,10 +469,22 @@ template<bool kRound>
             lo[i] = std::max(ceil_d<kRound>(xc - half), first_col) - first_col;
             hi[i] = std::min(floor_d<kRound>(xc + half), last_col) - first_col;
         }
-        // Then the bits: a run within a word or across two (a disc below a
-        // pixel's width) without a branch on which; wider runs fill the
-        // words between.
+        // Then the bits. A run no longer than kWindowRun points (a disc up
+        // to three pixels wide) is ORed in as one window of four words from
+        // its first word (two words for a run of at most 64 points, a disc
+        // up to a pixel wide), with masks from kRunMasks: no branch on how
+        // many words it crosses. (A run holds at most 2 half + 1 points,
+        // half <= r inv_hx; the margin of 2 covers the rounding of half.)
         uint64_t* row = bits + (ga - gy0) * tw;
+        const double width = 2.0 * d.r_um * inv_hx;
+        if (width <= static_cast<double>(kWindowRun - 2)) {
+            if (width <= static_cast<double>(64 - 2))
+                or_runs<Words2>(lo, hi, n, row, tw);
+            else
+                or_runs<Words4>(lo, hi, n, row, tw);
+            continue;
+        }
+        // Wider runs: the first and last words, then the words between.
         for (int i = 0; i < n; ++i, row += tw) {
             const int64_t ka = static_cast<int64_t>(lo[i]);
             const int64_t kb = static_cast<int64_t>(hi[i]);
@@ -466,7 +539,9 @@ void raster_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int
     const double hy = py_um / static_cast<double>(S);
     const double inv_hx = static_cast<double>(kX) / px_um, inv_hy = static_cast<double>(S) / py_um;
     auto& bits = scratch.bits;
-    bits.assign(static_cast<size_t>(tw * rows), 0);
+    // Three words of padding: a run's four-word window may reach past the
+    // last word of the last row (ORing zeros there).
+    bits.assign(static_cast<size_t>(tw * rows + 3), 0);
 #if defined(__x86_64__) && defined(__GNUC__)
     static const bool has_avx2 = __builtin_cpu_supports("avx2");
     if (has_avx2 && !scratch.portable)
