@@ -50,6 +50,23 @@ public:
     /// curve).
     template<typename Visit> void for_each_grain_near(const RectUm& rect, Visit&& visit) const;
 
+    /// A cell's grains as arrays, for kernels that decide them in plain
+    /// loops: grain i is at (x[i], y[i]) with radius r[i] and development
+    /// bits u_bits[i]; its identity (for_each_grain_near's id) is
+    /// grain_id(i).
+    struct Batch {
+        uint64_t cell = 0;
+        size_t n      = 0;
+        std::vector<double> x, y, r;
+        std::vector<uint32_t> u_bits;
+        uint64_t grain_id(size_t i) const { return hash_combine(cell, i); }
+    };
+    /// Calls visit(batch) for every cell of for_each_grain_near, in its
+    /// order, with the cell's grains (the same grains, in the same order).
+    /// `batch` is scratch, reused from cell to cell.
+    template<typename Visit>
+    void for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const;
+
 private:
     PopulationGrains m_grains;
     int m_quantiles = 0;
@@ -61,7 +78,7 @@ private:
 };
 
 template<typename Visit>
-void FastGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+void FastGrains::for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const
 {
     constexpr double k2m32 = 0x1.0p-32;
     const double q         = static_cast<double>(m_quantiles) * k2m32;
@@ -71,20 +88,43 @@ void FastGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
         Rng count_rng(cell, Stage::fast_cell);
         const uint64_t n = sample_poisson(bin.grains_per_um2 * bin.cell_um * bin.cell_um,
                                           count_rng);
+        batch.cell = cell;
+        batch.n    = static_cast<size_t>(n);
+        if (batch.x.size() < batch.n) {
+            batch.x.resize(batch.n);
+            batch.y.resize(batch.n);
+            batch.r.resize(batch.n);
+            batch.u_bits.resize(batch.n);
+        }
         const double* radius = m_radius[b].data();
         const double x0 = static_cast<double>(cx) * bin.cell_um;
         const double y0 = static_cast<double>(cy) * bin.cell_um;
         const double scale = bin.cell_um * k2m32;
-        for (uint64_t i = 0; i < n; ++i) {
+        double* xs = batch.x.data();
+        double* ys = batch.y.data();
+        double* rs = batch.r.data();
+        uint32_t* us = batch.u_bits.data();
+        for (size_t i = 0; i < batch.n; ++i) {
             const uint64_t w0 = counter_u64(cell, 2 * i);
             const uint64_t w1 = counter_u64(cell, 2 * i + 1);
-            const double x    = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
-            const double y    = y0 + static_cast<double>(w0 >> 32) * scale;
-            const double t    = static_cast<double>(w1 & 0xffffffffu) * q;
-            const size_t k    = static_cast<size_t>(t);
-            const double r    = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
-            visit(x, y, r, static_cast<uint32_t>(w1 >> 32), hash_combine(cell, i));
+            xs[i]          = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
+            ys[i]          = y0 + static_cast<double>(w0 >> 32) * scale;
+            const double t = static_cast<double>(w1 & 0xffffffffu) * q;
+            const size_t k = static_cast<size_t>(t);
+            rs[i] = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
+            us[i] = static_cast<uint32_t>(w1 >> 32);
         }
+        visit(static_cast<const Batch&>(batch));
+    });
+}
+
+template<typename Visit>
+void FastGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+{
+    Batch batch;
+    for_each_cell_batch(rect, batch, [&](const Batch& b) {
+        for (size_t i = 0; i < b.n; ++i)
+            visit(b.x[i], b.y[i], b.r[i], b.u_bits[i], b.grain_id(i));
     });
 }
 

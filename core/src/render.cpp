@@ -211,6 +211,11 @@ struct TileScratch {
     std::vector<double> log_factor;  ///< per pixel, pixel scale of an inhibited layer
     /// Grains visited, for the stop check (poll_stop).
     uint32_t grains_seen = 0;
+    /// A cell's grains, their mean photons, develop uniforms and decisions
+    /// from the curve (develop_fast).
+    FastGrains::Batch batch;
+    std::vector<double> lambda, u;
+    std::vector<uint8_t> decided;
 };
 
 /// What happened to one grain.
@@ -274,11 +279,9 @@ public:
                     const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
                     const auto run = [&](const auto& integral) {
                         if (plain)
-                            develop_fast<true>(layer, pop, rect, scratch.discs,
-                                               scratch.grains_seen, c, integral);
+                            develop_fast<true>(layer, pop, rect, scratch, c, integral);
                         else
-                            develop_fast<false>(layer, pop, rect, scratch.discs,
-                                                scratch.grains_seen, c, integral);
+                            develop_fast<false>(layer, pop, rect, scratch, c, integral);
                     };
                     if (pop.exposure == ExposureMethod::centre)
                         run(centre);
@@ -405,13 +408,17 @@ private:
     /// P(develop | mean photons). `integral(x, y, r)` is the exposure value
     /// integrated over the disc (value x um^2), chosen once per population.
     /// Developed grains whose image touches the tile are appended to
-    /// `discs`.
+    /// `discs`, in the grains' order.
     /// `Plain`: the layer is silver and not inhibited (no reach or uniform
     /// to adjust per grain).
+    /// A cell at a time: first every grain's mean photons and decision from
+    /// the curve in one loop without branches, then the grains whose image
+    /// touches the tile counted and their discs kept, the few beyond the
+    /// curve (blown highlights, or no curve) decided from their photon
+    /// count.
     template<bool Plain, typename Integral>
     void develop_fast(const LayerPlan& layer, const PopulationPlan& pop, const RectUm& rect,
-                      std::vector<Disc>& discs, uint32_t& grains_seen, FastCounts& c,
-                      const Integral& integral) const
+                      TileScratch& scratch, FastCounts& c, const Integral& integral) const
     {
         const FramePlane* inhibition = layer.inhibition.get();
         // Without a curve (grains=fast asked for with other kinetics) every
@@ -419,41 +426,87 @@ private:
         const DevelopCurve* curve = pop.curve.get();
         const double lambda_max   = curve ? curve->lambda_max() : -1.0;
         const double k            = pop.photons_per_value_um2;
-        pop.fast->for_each_grain_near(Plain ? rect : reach_rect(rect, layer, pop),
-                                      [&](double x, double y, double r, uint32_t bits,
-                                          uint64_t id) {
-            poll_stop(grains_seen);
-            const Disc disc { x, y, r };
-            if (Plain ? !disc_touches_rect(disc, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um)
-                      : !image_touches_rect(layer, disc, rect))
-                return;
-            const double lambda = k * integral(x, y, r);
-            // u in (0, 1); develops iff u >= 1 - P, as Development::develops.
-            double u = (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
-            if constexpr (!Plain)
-                if (inhibition)
-                    u = inhibited_uniform(u, inhibition->at(x, y));
-            bool developed;
-            GrainOutcome o;  // photons and events: only beyond the curve
-            if (lambda <= lambda_max) {
-                developed = u >= 1.0 - curve->probability(lambda);
-            } else {
-                // Beyond the curve (blown highlights), or no curve: the photon
-                // count, then the table or the chain, as the table path does.
-                Grain g { x, y, r, id };
-                o = decide_from_mean(pop, g, lambda, u);
-                developed = o.developed;
-            }
-            // Count each grain once: in the tile holding its centre.
-            if (x >= rect.x0_um && x < rect.x1_um && y >= rect.y0_um && y < rect.y1_um) {
-                ++c.grains;
-                c.developed += developed;
-                c.photons += o.photons;
-                c.events += o.events;
-            }
-            if (developed)
-                discs.push_back(disc);
-        });
+        const RectUm tile         = rect;
+        std::vector<Disc>& discs  = scratch.discs;
+        size_t nd                 = discs.size();
+        pop.fast->for_each_cell_batch(
+            Plain ? rect : reach_rect(rect, layer, pop), scratch.batch,
+            [&](const FastGrains::Batch& b) {
+                const size_t n = b.n;
+                // The stop check once per 4096 grains, as poll_stop.
+                const uint32_t before = scratch.grains_seen;
+                scratch.grains_seen += static_cast<uint32_t>(n);
+                if ((before >> 12) != (scratch.grains_seen >> 12)
+                    && m_stop.load(std::memory_order_relaxed))
+                    throw Stopped {};
+                if (scratch.lambda.size() < n) {
+                    scratch.lambda.resize(n);
+                    scratch.u.resize(n);
+                    scratch.decided.resize(n);
+                }
+                double* lambda   = scratch.lambda.data();
+                double* uniform  = scratch.u.data();
+                uint8_t* decided = scratch.decided.data();
+                // u in (0, 1); develops iff u >= 1 - P, as
+                // Development::develops. Kept for the second loop where the
+                // inhibitors change it.
+                const auto uniform_of = [&](size_t i) {
+                    double u = (static_cast<double>(b.u_bits[i]) + 0.5) * 0x1.0p-32;
+                    if constexpr (!Plain)
+                        if (inhibition)
+                            u = inhibited_uniform(u, inhibition->at(b.x[i], b.y[i]));
+                    return u;
+                };
+                const auto first_loop = [&](auto with_curve) {
+                    for (size_t i = 0; i < n; ++i) {
+                        const double l = k * integral(b.x[i], b.y[i], b.r[i]);
+                        const double u = uniform_of(i);
+                        lambda[i]      = l;
+                        if constexpr (!Plain)
+                            uniform[i] = u;
+                        // A grain beyond the curve reads it at 0 here and
+                        // is decided below.
+                        if constexpr (decltype(with_curve)::value)
+                            decided[i] = u >= 1.0 - curve->probability(l <= lambda_max ? l : 0.0);
+                        else
+                            decided[i] = 0;
+                    }
+                };
+                if (curve)
+                    first_loop(std::true_type {});
+                else
+                    first_loop(std::false_type {});
+                if (discs.size() < nd + n)
+                    discs.resize(std::max(2 * discs.size(), nd + n));
+                for (size_t i = 0; i < n; ++i) {
+                    const Disc disc { b.x[i], b.y[i], b.r[i] };
+                    if (Plain ? !disc_touches_rect(disc, tile.x0_um, tile.y0_um, tile.x1_um,
+                                                   tile.y1_um)
+                              : !image_touches_rect(layer, disc, tile))
+                        continue;
+                    bool developed = decided[i];
+                    GrainOutcome o;  // photons and events: only beyond the curve
+                    if (!(lambda[i] <= lambda_max)) {
+                        // The photon count, then the table or the chain, as
+                        // the table path does.
+                        const Grain g { disc.x_um, disc.y_um, disc.r_um, b.grain_id(i) };
+                        o = decide_from_mean(pop, g, lambda[i], Plain ? uniform_of(i) : uniform[i]);
+                        developed = o.developed;
+                    }
+                    // Count each grain once: in the tile holding its centre.
+                    if (disc.x_um >= tile.x0_um && disc.x_um < tile.x1_um
+                        && disc.y_um >= tile.y0_um && disc.y_um < tile.y1_um) {
+                        ++c.grains;
+                        c.developed += developed;
+                        c.photons += o.photons;
+                        c.events += o.events;
+                    }
+                    // Kept only if developed, without a branch on it.
+                    discs[nd] = disc;
+                    nd += developed;
+                }
+            });
+        discs.resize(nd);
     }
 
     /// MODEL.md 2-4 for one grain: absorbed photons, latent image,
