@@ -177,6 +177,29 @@ TEST(RasterCoverage, UnbiasedAgainstExactCoverageAndTileIndependent)
     EXPECT_EQ(tiled, raster);
 }
 
+/// `count` discs with centres uniform in [lo, hi]^2 and radii 0.05 +
+/// r_max u^3: most far below a pixel, some several pixels wide.
+std::vector<Disc> random_discs(uint64_t seed, double lo, double hi, int count, double r_max)
+{
+    std::mt19937_64 gen(seed);
+    std::uniform_real_distribution<double> pos(lo, hi), unit(0.0, 1.0);
+    std::vector<Disc> discs;
+    for (int i = 0; i < count; ++i)
+        discs.push_back({ pos(gen), pos(gen), 0.05 + r_max * std::pow(unit(gen), 3.0) });
+    return discs;
+}
+
+/// A block of covered fractions that is neither empty nor full (so that a
+/// comparison of two of them tests something).
+void expect_partly_covered(const std::vector<double>& fraction)
+{
+    double mean = 0.0;
+    for (double v : fraction)
+        mean += v / static_cast<double>(fraction.size());
+    EXPECT_GT(mean, 0.1);
+    EXPECT_LT(mean, 0.99);
+}
+
 TEST(RasterCoverage, CoversThePointsOfEachDiscsRowSpans)
 {
     // Against a plain reference: a byte per sample point, each disc's span
@@ -187,11 +210,7 @@ TEST(RasterCoverage, CoversThePointsOfEachDiscsRowSpans)
     // the four-word window) and discs cut by the block's edges, so that
     // how raster_coverage sets its bits (windows of words, masks, padding)
     // must give exactly the points of the spans, in every build.
-    std::mt19937_64 gen(11);
-    std::uniform_real_distribution<double> pos(60.0, 260.0), unit(0.0, 1.0);
-    std::vector<Disc> discs;
-    for (int i = 0; i < 1500; ++i)
-        discs.push_back({ pos(gen), pos(gen), 0.05 + 14.0 * std::pow(unit(gen), 3.0) });
+    const std::vector<Disc> discs = random_discs(11, 60.0, 260.0, 1500, 14.0);
     const int64_t x0 = 25, y0 = 20, x1 = 65, y1 = 50;  // 3.1 x 3.7 um pixels
     const double px = 3.1, py = 3.7;
     for (int samples : { 1, 7, 42 }) {
@@ -231,11 +250,7 @@ TEST(RasterCoverage, CoversThePointsOfEachDiscsRowSpans)
             raster_coverage(discs, x0, y0, x1, y1, px, py, samples, rs, got.data());
             EXPECT_EQ(got, want) << samples << " rows per pixel, portable " << portable;
         }
-        double mean = 0.0;
-        for (double v : want)
-            mean += v / static_cast<double>(want.size());
-        EXPECT_GT(mean, 0.1);  // the block is neither empty...
-        EXPECT_LT(mean, 0.99); // ...nor full
+        expect_partly_covered(want);
     }
 }
 
@@ -245,11 +260,7 @@ TEST(RasterCoverage, EveryBuildGivesTheSameBits)
     // the same points covered, so the same fractions, for discs from far
     // below a pixel to several pixels wide (runs within a word, across two,
     // across many), on a block away from the origin.
-    std::mt19937_64 gen(7);
-    std::uniform_real_distribution<double> pos(90.0, 230.0), unit(0.0, 1.0);
-    std::vector<Disc> discs;
-    for (int i = 0; i < 3000; ++i)
-        discs.push_back({ pos(gen), pos(gen), 0.05 + 12.0 * std::pow(unit(gen), 3.0) });
+    const std::vector<Disc> discs = random_discs(7, 90.0, 230.0, 3000, 12.0);
     for (int samples : { 1, 7, 42, 256 }) {
         std::vector<double> fast(40 * 30), portable(40 * 30);
         RasterScratch rs;
@@ -257,11 +268,7 @@ TEST(RasterCoverage, EveryBuildGivesTheSameBits)
         rs.portable = true;
         raster_coverage(discs, 25, 20, 65, 50, 3.1, 3.7, samples, rs, portable.data());
         EXPECT_EQ(fast, portable) << samples << " rows per pixel";
-        double mean = 0.0;
-        for (double v : fast)
-            mean += v / static_cast<double>(fast.size());
-        EXPECT_GT(mean, 0.1);  // the block is neither empty...
-        EXPECT_LT(mean, 0.99); // ...nor full
+        expect_partly_covered(fast);
     }
 }
 
