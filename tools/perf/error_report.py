@@ -58,9 +58,14 @@ Metrics (definitions; the report repeats them)
                the patch (valid positions only); ratio = sigma_path /
                sigma_exact. CI from batch means over horizontal bands of the
                patch (2 aperture diameters tall, independent apart from
-               grains straddling a band edge) and seeds: the log ratio per
-               band, mean +- t sd / sqrt(nbands). Steps where an aperture
+               grains straddling a band edge) and seeds: the ratio estimator
+               sum vp / sum ve of the bands' variances, its CI by the delta
+               method (granularity_ratio_ci). Steps where an aperture
                reads the density clamp (max_density) are left out.
+  pooled       per configuration, the wedge steps' biases and log
+               granularity ratios averaged with inverse-variance weights
+               (standard errors from the plain 95% CIs), with chi^2 of the
+               steps about no error against its upper 5% point.
   pixel T      per-pixel transmittance error |T_path - T_exact|, RMS and max
                over all pixels, for the runs whose grain fates are
                bit-identical to exact (the --stats path of every population
@@ -88,6 +93,7 @@ import json
 import math
 import os
 import re
+import shlex
 import shutil
 import sys
 import time
@@ -177,6 +183,18 @@ def all_configs():
     ]
 
 
+def seed_list(seeds):
+    """"seed 1", "seeds 1-12", "seeds 1-3, 7": runs of consecutive seeds."""
+    runs = []
+    for v in seeds:
+        if runs and v == runs[-1][1] + 1:
+            runs[-1][1] = v
+        else:
+            runs.append([v, v])
+    text = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
+    return ("seed " if len(seeds) == 1 else "seeds ") + text
+
+
 class Scene:
     def __init__(self, name, args, stock, seeds, wedge, width_mm, roi=None, label="",
                  aperture_um=None, knob_seeds=None):
@@ -192,6 +210,13 @@ class Scene:
         self.width_mm = width_mm
         self.roi = roi            # (x, y, w, h) or None
         self.label = label
+
+    def description(self):
+        """The label and the seeds the scene runs with (--seeds replaces them)."""
+        text = f"{self.label}, {seed_list(self.seeds)}"
+        if self.knob_seeds != self.seeds:
+            text += f" (knobs: {seed_list(self.knob_seeds)})"
+        return text
 
     def modifiers(self):
         m = f"stock={self.stock}:width_mm={self.width_mm:g}"
@@ -210,20 +235,20 @@ def all_scenes(small):
         # 3 mm (2.98 um pixels; its grains are 3-3.5 um) with four.
         return [
             Scene("wedge-paper", ["--wedge"], "paper", [1, 2, 3, 4, 5, 6], True, 6.3,
-                  label="wedge, paper, 6.3 mm strip, seeds 1-6"),
+                  label="wedge, paper, 6.3 mm strip"),
             Scene("wedge-color", ["--wedge"], "color-negative", [1, 2, 3, 4], True, 3.0,
-                  label="wedge, color-negative, 3 mm strip, seeds 1-4", aperture_um=24.0),
+                  label="wedge, color-negative, 3 mm strip", aperture_um=24.0),
         ]
     return [
         Scene("wedge-paper", ["--wedge"], "paper", list(range(1, 13)), True, 6.3,
               knob_seeds=[1, 2, 3],
-              label="wedge, paper (1 layer), 6.3 mm strip, seeds 1-12 (knobs: 1-3)"),
+              label="wedge, paper (1 layer), 6.3 mm strip"),
         Scene("wedge-color", ["--wedge"], "color-negative", [1, 2, 3, 4], True, 6.3,
               knob_seeds=[1],
-              label="wedge, color-negative (3 layers), 6.3 mm strip, seeds 1-4 (knobs: 1)"),
+              label="wedge, color-negative (3 layers), 6.3 mm strip"),
         Scene("natural", [GRACE_HOPPER, "--iscolorspace", "sRGB"], "color-negative", [1], False,
               4.0, roi=(128, 172, 256, 256),
-              label="grace_hopper.jpg, color-negative, 4 mm wide, central 256x256, seed 1"),
+              label="grace_hopper.jpg, color-negative, 4 mm wide, central 256x256"),
     ]
 
 
@@ -785,7 +810,7 @@ def main(argv=None):
         stock = fgperf.stock_json(binary, scene.stock)
         base, max_d = stock["base_density"], stock["max_density"]
         r_um = large_grain_radius_um(stock)
-        log(f"{scene.name}: {scene.label}")
+        log(f"{scene.name}: {scene.description()}")
         per_config = {c.name: {"runs": [], "wedge": None, "pixels": [], "natural": None}
                       for c in configs}
         geometry = {}
@@ -960,6 +985,69 @@ def write_outputs(args, summary, steps_rows, acceptance, log_lines, elapsed, bin
     write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scenes)
 
 
+def pooled_table(dsteps):
+    """Markdown lines: per scene and configuration, the steps' biases and
+    granularity ratios pooled with inverse-variance weights (each step's
+    standard error from its plain 95% CI: half-width / 1.96, on log G for
+    the ratio), with chi^2 of the steps about zero (about 1 for the ratio)
+    and its upper 5% point (Wilson-Hilferty) for as many steps: a pooled
+    value that excludes 0 says the path is biased on average (mostly where
+    the CIs are narrow, the thin steps); a chi^2 above its 5% point says the
+    steps differ by more than their CIs allow."""
+    def pool(values, ses):
+        w = [1.0 / (s * s) for s in ses]
+        mean = sum(v * wi for v, wi in zip(values, w)) / sum(w)
+        chi2 = sum((v / s) ** 2 for v, s in zip(values, ses))
+        return mean, 1.96 / math.sqrt(sum(w)), chi2
+
+    def chi2_95(k):
+        return k * (1.0 - 2.0 / (9.0 * k) + 1.645 * math.sqrt(2.0 / (9.0 * k))) ** 3
+
+    L = ["## Pooled over the wedge steps", "",
+         "Inverse-variance means of the per-step values above (standard errors from the plain "
+         "95% CIs), chi^2 of the steps about no error and its upper 5% point for that many "
+         "steps (Wilson-Hilferty). Steps with a clamped aperture are left out of the ratio.", "",
+         "| scene | configuration | steps | bias mean D (95% CI) | chi^2 (5% point) | "
+         "bias macro D (95% CI) | chi^2 (5% point) | G ratio (95% CI) | chi^2 (5% point) |",
+         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    keys = []
+    for r in dsteps:
+        if (r["scene"], r["config"]) not in keys:
+            keys.append((r["scene"], r["config"]))
+    for scene, config in keys:
+        rows = [r for r in dsteps if r["scene"] == scene and r["config"] == config
+                and r["ci_mean"] > 0 and r["ci_macro"] > 0]
+        if not rows:
+            continue
+        m, mci, mchi = pool([r["bias_mean"] for r in rows], [r["ci_mean"] / 1.96 for r in rows])
+        a, aci, achi = pool([r["bias_macro"] for r in rows], [r["ci_macro"] / 1.96 for r in rows])
+        g = [r for r in rows if not r["clamped_apertures"] and r["g_lo"] > 0
+             and r["g_hi"] > r["g_lo"]]
+        gcell = "n/a | n/a"
+        if g:
+            lg, lci, lchi = pool([math.log(r["g_ratio"]) for r in g],
+                                 [(math.log(r["g_hi"]) - math.log(r["g_lo"])) / (2 * 1.96)
+                                  for r in g])
+            gcell = (f"{math.exp(lg):.4f} [{math.exp(lg - lci):.4f}, {math.exp(lg + lci):.4f}] | "
+                     f"{lchi:.1f} ({chi2_95(len(g)):.1f}, {len(g)} steps)")
+        L.append(f"| {scene} | {config} | {len(rows)} | {m:+.5f} (+-{mci:.5f}) | "
+                 f"{mchi:.1f} ({chi2_95(len(rows)):.1f}) | {a:+.5f} (+-{aci:.5f}) | "
+                 f"{achi:.1f} ({chi2_95(len(rows)):.1f}) | {gcell} |")
+    L.append("")
+    return L
+
+
+def selection_args(args):
+    """The options that select or change what ran, as typed (quoted for a shell)."""
+    out = ""
+    for flag, value in (("--scenes", args.scenes), ("--configs", args.configs),
+                        ("--seeds", args.seeds), ("--extra-auto", args.extra_auto),
+                        ("--aperture-um", args.aperture_um), ("--threads", args.threads)):
+        if value is not None and value != 0:
+            out += f" {flag} {shlex.quote(str(value))}"
+    return out
+
+
 def write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scenes):
     repo = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     L = []
@@ -967,12 +1055,13 @@ def write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scene
     L.append("")
     L.append("Generated by `/usr/bin/python3 tools/perf/error_report.py --bin "
              f"{os.path.relpath(binary, repo)} --out {os.path.relpath(os.path.abspath(args.out), repo)}"
-             + (" --small" if args.small else "") + f"` in {elapsed / 60:.1f} min at commit "
+             + (" --small" if args.small else "") + selection_args(args)
+             + f"` in {elapsed / 60:.1f} min at commit "
              f"{fgperf.git_describe(repo)}; {fgperf.machine_note()}. Times are whole CLI runs "
              "(tables, render, EXR write); the machine is shared, so compare ratios within "
              "this run, never absolute seconds across runs.")
     L.append("")
-    L.append("Scenes: " + "; ".join(f"`{s.name}` = {s.label}" for s in scenes) + ".")
+    L.append("Scenes: " + "; ".join(f"`{s.name}` = {s.description()}" for s in scenes) + ".")
     L.append("")
     L.append("![error against time](error_vs_time.png)")
     L.append("")
@@ -1033,7 +1122,7 @@ def write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scene
         if not rows:
             continue
         g = rows[0]["geometry"]
-        L.append(f"## {sc.name}: {sc.label}")
+        L.append(f"## {sc.name}: {sc.description()}")
         L.append("")
         if sc.wedge:
             L.append(f"Scan pixels {g['pitch_um']:.3g} um; patch = step interior "
@@ -1093,6 +1182,7 @@ def write_markdown(args, summary, steps_rows, acceptance, elapsed, binary, scene
                      f"{fmt(r['g_ratio'], 3)}{clamp} | [{fmt(r['g_lo'], 3)}, {fmt(r['g_hi'], 3)}] | "
                      f"{r['blocks']} |")
         L.append("")
+        L.extend(pooled_table(dsteps))
     L.append("## Definitions")
     L.append("")
     doc = __doc__
