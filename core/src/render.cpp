@@ -216,6 +216,7 @@ struct TileScratch {
     FastGrains::Batch batch;
     std::vector<double> lambda, u;
     std::vector<uint8_t> decided;
+    std::vector<uint32_t> touching;  ///< indices into the batch
 };
 
 /// What happened to one grain.
@@ -443,6 +444,19 @@ private:
                     scratch.lambda.resize(n);
                     scratch.u.resize(n);
                     scratch.decided.resize(n);
+                    scratch.touching.resize(n);
+                }
+                // The grains whose image touches the tile, in order: the
+                // only ones whose exposure is read (a grain of a nearby cell
+                // may lie beyond the input window a ROI was given).
+                uint32_t* touching = scratch.touching.data();
+                size_t m           = 0;
+                for (size_t i = 0; i < n; ++i) {
+                    const Disc disc { b.x[i], b.y[i], b.r[i] };
+                    touching[m] = static_cast<uint32_t>(i);
+                    m += Plain ? disc_touches_rect(disc, tile.x0_um, tile.y0_um, tile.x1_um,
+                                                   tile.y1_um)
+                               : image_touches_rect(layer, disc, tile);
                 }
                 double* lambda   = scratch.lambda.data();
                 double* uniform  = scratch.u.data();
@@ -457,40 +471,40 @@ private:
                             u = inhibited_uniform(u, inhibition->at(b.x[i], b.y[i]));
                     return u;
                 };
+                // Every touching grain's mean photons and its decision from
+                // the curve (j: its place among them).
                 const auto first_loop = [&](auto with_curve) {
-                    for (size_t i = 0; i < n; ++i) {
+                    for (size_t j = 0; j < m; ++j) {
+                        const size_t i = touching[j];
                         const double l = k * integral(b.x[i], b.y[i], b.r[i]);
                         const double u = uniform_of(i);
-                        lambda[i]      = l;
+                        lambda[j]      = l;
                         if constexpr (!Plain)
-                            uniform[i] = u;
+                            uniform[j] = u;
                         // A grain beyond the curve reads it at 0 here and
                         // is decided below.
                         if constexpr (decltype(with_curve)::value)
-                            decided[i] = u >= 1.0 - curve->probability(l <= lambda_max ? l : 0.0);
+                            decided[j] = u >= 1.0 - curve->probability(l <= lambda_max ? l : 0.0);
                         else
-                            decided[i] = 0;
+                            decided[j] = 0;
                     }
                 };
                 if (curve)
                     first_loop(std::true_type {});
                 else
                     first_loop(std::false_type {});
-                if (discs.size() < nd + n)
-                    discs.resize(std::max(2 * discs.size(), nd + n));
-                for (size_t i = 0; i < n; ++i) {
+                if (discs.size() < nd + m)
+                    discs.resize(std::max(2 * discs.size(), nd + m));
+                for (size_t j = 0; j < m; ++j) {
+                    const size_t i = touching[j];
                     const Disc disc { b.x[i], b.y[i], b.r[i] };
-                    if (Plain ? !disc_touches_rect(disc, tile.x0_um, tile.y0_um, tile.x1_um,
-                                                   tile.y1_um)
-                              : !image_touches_rect(layer, disc, tile))
-                        continue;
-                    bool developed = decided[i];
+                    bool developed = decided[j];
                     GrainOutcome o;  // photons and events: only beyond the curve
-                    if (!(lambda[i] <= lambda_max)) {
+                    if (!(lambda[j] <= lambda_max)) {
                         // The photon count, then the table or the chain, as
                         // the table path does.
                         const Grain g { disc.x_um, disc.y_um, disc.r_um, b.grain_id(i) };
-                        o = decide_from_mean(pop, g, lambda[i], Plain ? uniform_of(i) : uniform[i]);
+                        o = decide_from_mean(pop, g, lambda[j], Plain ? uniform_of(i) : uniform[j]);
                         developed = o.developed;
                     }
                     // Count each grain once: in the tile holding its centre.

@@ -20,6 +20,7 @@ and a run's time does not depend on which runs came before it.
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -113,6 +114,11 @@ def run_cli(argv, timeout_s=None, stats_path=None):
         cpu, maxrss_kib, code = float(user) + float(system), int(maxrss), int(code)
     except ValueError:
         cpu, maxrss_kib, code = float("nan"), 0, proc.returncode
+    # A child killed by a signal exits with status 0 for time's %x: time says
+    # "Command terminated by signal N" on a line of its own instead.
+    m = re.search(r"Command terminated by signal (\d+)", " ".join(fields))
+    if m and code == 0:
+        code = -int(m.group(1))
     returncode = -9 if killed else code
     res = RunResult(argv=list(argv), wall_s=wall, cpu_s=cpu, maxrss_kib=maxrss_kib,
                     returncode=returncode, stderr=stderr)
