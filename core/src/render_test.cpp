@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -176,8 +177,8 @@ TEST(Render, AWindowOfTheInputIsEnough)
         ASSERT_TRUE(required_input_window(s.stock, s.scene, 48, 32, settings, w)) << name;
         EXPECT_GT(w.x_begin, 0) << name;
         EXPECT_LT(w.x_end, 48) << name;
-        // The window in a buffer of its own (so that a read beyond it is
-        // outside the allocation).
+        // The window in a buffer of its own, exactly its size (so that a
+        // read beyond it is outside the allocation).
         std::vector<float> window;
         for (int64_t y = w.y_begin; y < w.y_end; ++y)
             for (int64_t x = w.x_begin; x < w.x_end; ++x)
@@ -185,7 +186,7 @@ TEST(Render, AWindowOfTheInputIsEnough)
                     window.push_back(s.pixels[(y * 48 + x) * 3 + c]);
         window.shrink_to_fit();
         TestScene part        = s;
-        part.pixels           = window;
+        part.pixels           = std::move(window);
         part.view             = ImageView { part.pixels.data(), w.width(), w.height(), 3 };
         part.view.x_origin    = w.x_begin;
         part.view.y_origin    = w.y_begin;
