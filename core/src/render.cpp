@@ -370,11 +370,15 @@ private:
     }
 
     /// Leaves the tile (throws Stopped) once the render is stopped; looks
-    /// at the flag every 4096 grains (a few microseconds of work apart).
-    /// `count`: the worker's grain counter (TileScratch::grains_seen).
-    void poll_stop(uint32_t& count) const
+    /// at the flag each time the count passes a multiple of 4096 grains (a
+    /// few microseconds of work apart). `count`: the worker's grain counter
+    /// (TileScratch::grains_seen); `grains`: how many were just visited (a
+    /// cell's batch in the fast kernel).
+    void poll_stop(uint32_t& count, uint32_t grains = 1) const
     {
-        if ((++count & 4095u) == 0 && m_stop.load(std::memory_order_relaxed))
+        const uint32_t before = count;
+        count += grains;
+        if ((before >> 12) != (count >> 12) && m_stop.load(std::memory_order_relaxed))
             throw Stopped {};
     }
 
@@ -434,12 +438,7 @@ private:
             Plain ? rect : reach_rect(rect, layer, pop), scratch.batch,
             [&](const FastGrains::Batch& b) {
                 const size_t n = b.n;
-                // The stop check once per 4096 grains, as poll_stop.
-                const uint32_t before = scratch.grains_seen;
-                scratch.grains_seen += static_cast<uint32_t>(n);
-                if ((before >> 12) != (scratch.grains_seen >> 12)
-                    && m_stop.load(std::memory_order_relaxed))
-                    throw Stopped {};
+                poll_stop(scratch.grains_seen, static_cast<uint32_t>(n));
                 if (scratch.lambda.size() < n) {
                     scratch.lambda.resize(n);
                     scratch.u.resize(n);
