@@ -994,8 +994,9 @@ def write_outputs(args, summary, steps_rows, acceptance, log_lines, elapsed, bin
 def pooled_table(dsteps):
     """Markdown lines: per scene and configuration, the steps' biases and
     granularity ratios pooled with inverse-variance weights (each step's
-    standard error from its plain 95% CI: half-width / 1.96, on log G for
-    the ratio), with chi^2 of the steps about zero (about 1 for the ratio)
+    standard error from its plain 95% CI: half-width / t975 of the degrees
+    of freedom it was computed with, on log G for the ratio; the pooled
+    CI is 1.96 standard errors, its degrees of freedom many), with chi^2 of the steps about zero (about 1 for the ratio)
     and its upper 5% point (Wilson-Hilferty) for as many steps: a pooled
     value that excludes 0 says the path is biased on average (mostly where
     the CIs are narrow, the thin steps); a chi^2 above its 5% point says the
@@ -1011,7 +1012,8 @@ def pooled_table(dsteps):
 
     L = ["## Pooled over the wedge steps", "",
          "Inverse-variance means of the per-step values above (standard errors from the plain "
-         "95% CIs), chi^2 of the steps about no error and its upper 5% point for that many "
+         "95% CIs: half-width / Student's t of the step's blocks, or bands for the ratio; the "
+         "pooled CI is 1.96 standard errors), chi^2 of the steps about no error and its upper 5% point for that many "
          "steps (Wilson-Hilferty). Steps with a clamped aperture are left out of the ratio.", "",
          "| scene | configuration | steps | bias mean D (95% CI) | chi^2 (5% point) | "
          "bias macro D (95% CI) | chi^2 (5% point) | G ratio (95% CI) | chi^2 (5% point) |",
@@ -1025,15 +1027,19 @@ def pooled_table(dsteps):
                 and r["ci_mean"] > 0 and r["ci_macro"] > 0]
         if not rows:
             continue
-        m, mci, mchi = pool([r["bias_mean"] for r in rows], [r["ci_mean"] / 1.96 for r in rows])
-        a, aci, achi = pool([r["bias_macro"] for r in rows], [r["ci_macro"] / 1.96 for r in rows])
+        # mean_ci's t over the step's blocks, granularity_ratio_ci's over
+        # its bands.
+        m, mci, mchi = pool([r["bias_mean"] for r in rows],
+                            [r["ci_mean"] / t975(r["blocks"] - 1) for r in rows])
+        a, aci, achi = pool([r["bias_macro"] for r in rows],
+                            [r["ci_macro"] / t975(r["blocks"] - 1) for r in rows])
         g = [r for r in rows if not r["clamped_apertures"] and r["g_lo"] > 0
-             and r["g_hi"] > r["g_lo"]]
+             and r["g_hi"] > r["g_lo"] and r["g_bands"] >= 2]
         gcell = "n/a | n/a"
         if g:
             lg, lci, lchi = pool([math.log(r["g_ratio"]) for r in g],
-                                 [(math.log(r["g_hi"]) - math.log(r["g_lo"])) / (2 * 1.96)
-                                  for r in g])
+                                 [(math.log(r["g_hi"]) - math.log(r["g_lo"]))
+                                  / (2 * t975(r["g_bands"] - 1)) for r in g])
             gcell = (f"{math.exp(lg):.4f} [{math.exp(lg - lci):.4f}, {math.exp(lg + lci):.4f}] | "
                      f"{lchi:.1f} ({chi2_95(len(g)):.1f}, {len(g)} steps)")
         L.append(f"| {scene} | {config} | {len(rows)} | {m:+.5f} (+-{mci:.5f}) | "
