@@ -996,11 +996,12 @@ def pooled_table(dsteps):
     granularity ratios pooled with inverse-variance weights (each step's
     standard error from its plain 95% CI: half-width / t975 of the degrees
     of freedom it was computed with, on log G for the ratio; the pooled
-    CI is 1.96 standard errors, its degrees of freedom many), with chi^2 of the steps about zero (about 1 for the ratio)
-    and its upper 5% point (Wilson-Hilferty) for as many steps: a pooled
-    value that excludes 0 says the path is biased on average (mostly where
-    the CIs are narrow, the thin steps); a chi^2 above its 5% point says the
-    steps differ by more than their CIs allow."""
+    CI is 1.96 standard errors, its degrees of freedom many), with chi^2
+    of the steps about zero (about 1 for the ratio) and its upper 5% point
+    (Wilson-Hilferty) for as many steps: a pooled value that excludes 0
+    says the path is biased on average (mostly where the CIs are narrow,
+    the thin steps); a chi^2 above its 5% point says the steps differ by
+    more than their CIs allow."""
     def pool(values, ses):
         w = [1.0 / (s * s) for s in ses]
         mean = sum(v * wi for v, wi in zip(values, w)) / sum(w)
@@ -1013,8 +1014,9 @@ def pooled_table(dsteps):
     L = ["## Pooled over the wedge steps", "",
          "Inverse-variance means of the per-step values above (standard errors from the plain "
          "95% CIs: half-width / Student's t of the step's blocks, or bands for the ratio; the "
-         "pooled CI is 1.96 standard errors), chi^2 of the steps about no error and its upper 5% point for that many "
-         "steps (Wilson-Hilferty). Steps with a clamped aperture are left out of the ratio.", "",
+         "pooled CI is 1.96 standard errors), chi^2 of the steps about no error and its upper "
+         "5% point for that many steps (Wilson-Hilferty). Steps with a clamped aperture are "
+         "left out of the ratio.", "",
          "| scene | configuration | steps | bias mean D (95% CI) | chi^2 (5% point) | "
          "bias macro D (95% CI) | chi^2 (5% point) | G ratio (95% CI) | chi^2 (5% point) |",
          "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
