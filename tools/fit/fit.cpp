@@ -39,7 +39,8 @@ double unmeasurable(const Stock& stock, const sm::Datasheet& sheet, DevelopModel
 /// grains_per_um2, log10 diameter_um,
 /// diameter_log_sigma, log10 quantum_efficiency.
 constexpr double kLo[4] = { std::log10(0.5), std::log10(0.2), 0.05, -2.0 };
-constexpr double kHi[4] = { std::log10(15.0), std::log10(3.0), 0.8, 0.0 };
+constexpr double kHi[4] = { std::log10(kMaxGrainsPerPopulationPerUm2), std::log10(3.0), 0.8,
+                            0.0 };
 /// Bounds of a dye layer's cloud search (MODEL.md 8): log10
 /// cloud_diameter_ratio, log10 cloud_density. Clouds at most twice their
 /// grain's diameter: larger ones lower the granularity further (a VISION3
@@ -589,40 +590,113 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     return {};
 }
 
-std::vector<std::string> model_limits(const sm::Datasheet& sheet, bool inhibited)
+double smallest_granularity_after(double rms1, double net1_density, double net2_density,
+                                  double grains_per_um2, double above_base1_density)
 {
+    const double aperture_um2
+        = M_PI / 4.0 * sm::kGranularityApertureUm * sm::kGranularityApertureUm;
+    const double s1           = rms1 / 1000.0;
+    const double k1           = std::log(10.0) * above_base1_density;  // bounds K_1(0)
+    // sigma_2^2 >= g(r): the first term rises with r, the second falls
+    // (r <= 1 < net2 / net1); a log grid, then a golden section around its
+    // smallest node.
+    const auto g = [&](double log_r) {
+        const double r     = std::exp(log_r);
+        const double first = std::isfinite(k1) ? r * std::exp(-(1.0 - r) * k1) * s1 * s1 : 0.0;
+        const double d     = net2_density - r * net1_density;
+        return first + d * d / (r * grains_per_um2 * aperture_um2);
+    };
+    constexpr int kNodes  = 2000;
+    constexpr double kLo  = -40.0;  // r = 4e-18: below it the second term only grows
+    const double step     = -kLo / kNodes;
+    int best              = 0;
+    double best_g         = g(kLo);
+    for (int n = 1; n <= kNodes; ++n)
+        if (const double v = g(kLo + n * step); v < best_g) {
+            best_g = v;
+            best   = n;
+        }
+    double lo = kLo + std::max(0, best - 1) * step, hi = kLo + std::min(kNodes, best + 1) * step;
+    const double phi = (std::sqrt(5.0) - 1.0) / 2.0;
+    for (int it = 0; it < 60; ++it) {
+        const double a = hi - phi * (hi - lo), b = lo + phi * (hi - lo);
+        if (g(a) < g(b))
+            hi = b;
+        else
+            lo = a;
+    }
+    return 1000.0 * std::sqrt(std::min(best_g, g(0.5 * (lo + hi))));
+}
+
+double smallest_falling_miss(double t1, double net1_density, double t2, double net2_density,
+                             double grains_per_um2, double above_base1_density)
+{
+    const auto reachable = [&](double m) {
+        return smallest_granularity_after(t1 * (1.0 - m), net1_density, net2_density,
+                                          grains_per_um2, above_base1_density)
+               <= t2 * (1.0 + m);
+    };
+    if (reachable(0.0))
+        return 0.0;
+    double lo = 0.0, hi = 1.0;  // m = 1 reads t1 as 0: always reachable
+    for (int it = 0; it < 50; ++it) {
+        const double m = 0.5 * (lo + hi);
+        (reachable(m) ? hi : lo) = m;
+    }
+    return hi;
+}
+
+std::vector<std::string> model_limits(const sm::Datasheet& sheet, bool inhibited,
+                                      const std::vector<double>& grains_per_um2)
+{
+    inhibited = inhibited && grains_per_um2.size() == sheet.layers.size();
+    const double tolerance = sm::Tolerances().granularity_rel;
     std::vector<std::string> out;
-    for (const sm::LayerTargets& t : sheet.layers) {
+    for (size_t i = 0; i < sheet.layers.size(); ++i) {
+        const sm::LayerTargets& t = sheet.layers[i];
+        // The D-min the net densities stand on (needed to read gross targets
+        // as net and to bound the density above base); NAN if unknown.
+        const double d_min = t.d_min ? *t.d_min : t.curve.empty() ? NAN : t.curve_d_min();
         // The worst falling pair (one reading: net or gross alike, by
         // density as the datasheet states them).
         double worst = 0.0;
         const sm::GranularityTarget* a = nullptr;
         const sm::GranularityTarget* b = nullptr;
         for (const sm::GranularityTarget& lo : t.granularity)
-            for (const sm::GranularityTarget& hi : t.granularity)
-                if (lo.net == hi.net && lo.density < hi.density && lo.rms > hi.rms) {
-                    const double miss = (lo.rms - hi.rms) / (lo.rms + hi.rms);
-                    if (miss > worst) {
-                        worst = miss;
-                        a     = &lo;
-                        b     = &hi;
-                    }
+            for (const sm::GranularityTarget& hi : t.granularity) {
+                if (!(lo.net == hi.net && lo.density < hi.density && lo.rms > hi.rms))
+                    continue;
+                double miss = (lo.rms - hi.rms) / (lo.rms + hi.rms);
+                if (inhibited) {
+                    const double shift = lo.net ? 0.0 : d_min;  // gross -> net
+                    if (std::isnan(shift))
+                        continue;
+                    const double above_base
+                        = std::isnan(d_min) ? INFINITY : lo.density - shift + d_min;
+                    miss = smallest_falling_miss(lo.rms, lo.density - shift, hi.rms,
+                                                 hi.density - shift, grains_per_um2[i], above_base);
                 }
+                if (miss > worst) {
+                    worst = miss;
+                    a     = &lo;
+                    b     = &hi;
+                }
+            }
         // Reachable within the tolerance (a bound equal to it, up to the
         // rounding of the targets' difference, is reachable at it).
-        if (!a || !(worst > sm::Tolerances().granularity_rel + 1e-12))
+        if (!a || !(worst > tolerance + 1e-12))
             continue;
         std::ostringstream o;
         o << t.name << " RMS granularity falls from " << format(a->rms) << " at "
           << (a->net ? "net " : "") << "D " << format(a->density) << " to " << format(b->rms)
-          << " at " << (b->net ? "net " : "") << "D " << format(b->density) << ": "
-          << (inhibited ? "the model's granularity can fall only through inhibition (MODEL.md "
-                          "10); without it, "
-                        : "")
-          << "it grows with density (every P(develop) grows with exposure), so at least one of "
-             "the two misses by "
-          << format(100.0 * worst, 3) << "% or more (tolerance "
-          << format(100.0 * sm::Tolerances().granularity_rel, 3) << "%)";
+          << " at " << (b->net ? "net " : "") << "D " << format(b->density) << ": ";
+        if (inhibited)
+            o << "inhibition (MODEL.md 10) lets the granularity fall, but a layer of at most "
+              << format(grains_per_um2[i]) << " grains per um^2 cannot fall that steeply";
+        else
+            o << "it grows with density (every P(develop) grows with exposure)";
+        o << ", so at least one of the two misses by " << format(100.0 * worst, 3)
+          << "% or more (tolerance " << format(100.0 * tolerance, 3) << "%)";
         out.push_back(o.str());
     }
     return out;

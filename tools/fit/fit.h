@@ -134,17 +134,57 @@ Status measure(const Stock& stock, const sensitometry::Datasheet& sheet,
                const ExpectedCurveOptions& curve, sensitometry::DatasheetFigures& figures,
                std::vector<sensitometry::Comparison>& comparisons);
 
+/// Most grains per um^2 the search gives one population (the fit's
+/// real-emulsion bound; the stock format allows 100).
+inline constexpr double kMaxGrainsPerPopulationPerUm2 = 15.0;
+
+/// The smallest RMS granularity (1000 sigma_D, 48 um aperture) that any
+/// layer with at most `grains_per_um2` grains per um^2 can have at net
+/// density `net2_density`, when it has `rms1` at `net1_density` <
+/// net2_density, inhibition of any strength included (MODEL.md 10, every
+/// entry >= 0). `above_base1_density` bounds the layer's density above its
+/// base at net1 (net1 + D-min; INFINITY if unknown: a weaker bound).
+///
+/// Derivation (Boolean model, MODEL.md 5 and 8, P(develop) nondecreasing in
+/// exposure, as the analytic figures assume). Population i develops
+/// mu_i = u lambda_i P_i grains per um^2, u = exp(-sum_j inhibition[k][j]
+/// Dbar_j) <= 1 falling with exposure; the density above base is
+/// D = log10(e) sum_i mu_i E[b_i] (b: a grain's blocking integral), and
+/// sigma_D^2 = log10(e)^2 integral w(h) (exp K(h) - 1) dh, w the aperture's
+/// normalised covariance, K = sum_i mu_i E[k_i(h)], k(0) <= b. Between the
+/// two exposures mu_2 = r mu_1 + u_2 Delta with r = u_2 / u_1 <= 1 and
+/// Delta_i = lambda_i (P_i2 - P_i1) >= 0, sum Delta_i <= grains_per_um2:
+///  - exp(r x) - 1 >= r exp(-(1 - r) x) (exp x - 1) (weighted AM-GM) with
+///    x <= K_1(0) <= ln 10 D_1 gives the first term r exp(-(1 - r) ln 10 D_1)
+///    sigma_1^2;
+///  - exp(a + b) - 1 >= exp(a) - 1 + b and Cauchy-Schwarz (E[b^2] >= E[b]^2,
+///    sum x_i E[b_i] squared <= sum x_i E[b_i]^2 sum x_i) give the second,
+///    u_2 (S_2 - S_1)^2 / (grains_per_um2 A) with S = D / u (the uninhibited
+///    density) and S_2 - S_1 >= net_2 / u_2 - net_1 / u_1 (fog only adds);
+///    its integral takes w as 1 / A over a grain's reach: first order in
+///    (cloud size / aperture), exact for grains far smaller than 48 um.
+/// The smallest sum over u_1 = 1 (best) and r in (0, 1] is returned.
+double smallest_granularity_after(double rms1, double net1_density, double net2_density,
+                                  double grains_per_um2, double above_base1_density);
+
+/// The smallest relative miss m that a pair of falling granularity targets
+/// (t1 at net1 < net2, t2 < t1) needs, smallest_granularity_after's bound:
+/// the least m with smallest_granularity_after(t1 (1 - m)) <= t2 (1 + m).
+double smallest_falling_miss(double t1, double net1_density, double t2, double net2_density,
+                             double grains_per_um2, double above_base1_density);
+
 /// What no stock of the model can reach within the tolerances, from the
 /// datasheet alone (one sentence each; empty if nothing). Granularity:
-/// without inhibition every
-/// P(develop) grows with exposure, so K(h), the Boolean model's aperture
-/// variance and the granularity grow with density; targets that fall
-/// between densities a < b (t_a > t_b) then miss by at least
-/// (t_a - t_b) / (t_a + t_b) (at best both are read as 2 t_a t_b / (t_a +
-/// t_b)). With inhibition (MODEL.md 10) development is thinned where the
-/// layer is dense and the granularity can fall, at the cost of the curve's
-/// shoulder. `inhibited`: whether the stock has inhibition.
-std::vector<std::string> model_limits(const sensitometry::Datasheet& sheet, bool inhibited);
+/// without inhibition every P(develop) grows with exposure, so K(h), the
+/// Boolean model's aperture variance and the granularity grow with
+/// density; targets that fall between densities a < b (t_a > t_b) then
+/// miss by at least (t_a - t_b) / (t_a + t_b) (at best both are read as
+/// 2 t_a t_b / (t_a + t_b)). With inhibition (`inhibited`: the stock has
+/// it) the granularity can fall, by as much as smallest_falling_miss allows
+/// a layer of at most `grains_per_um2[i]` grains per um^2 (datasheet layer
+/// i; empty: the no-inhibition reading only).
+std::vector<std::string> model_limits(const sensitometry::Datasheet& sheet, bool inhibited,
+                                      const std::vector<double>& grains_per_um2);
 
 /// A Markdown table of the comparisons (target, achieved, error, miss,
 /// tolerance, met).

@@ -328,8 +328,20 @@ int main(int argc, char** argv)
     int missed              = 0;
     for (const auto& c : comparisons)
         missed += c.met() ? 0 : 1;
+    // The grains each datasheet layer may hold: the search's bound for a fit
+    // (every population at its most), the stock's own for a measurement.
+    std::vector<double> layer_grains_per_um2;
+    for (const auto& t : sheet.layers) {
+        double sum = 0.0;
+        for (const filmgrain::Layer& l : stock.layers)
+            if (l.name == t.name)
+                for (const filmgrain::Population& p : l.populations)
+                    sum += measure_path.empty() ? filmgrain::fit::kMaxGrainsPerPopulationPerUm2
+                                                : p.grains_per_um2;
+        layer_grains_per_um2.push_back(sum);
+    }
     const std::vector<std::string> limits
-        = filmgrain::fit::model_limits(sheet, stock.inhibits());
+        = filmgrain::fit::model_limits(sheet, stock.inhibits(), layer_grains_per_um2);
     std::cout << table;
     for (const std::string& l : limits)
         std::cout << "model limit: " << l << "\n";
