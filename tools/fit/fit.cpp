@@ -49,13 +49,16 @@ constexpr double kHi[4] = { std::log10(kMaxGrainsPerPopulationPerUm2), std::log1
 /// applies (an hours-long grain-by-grain render).
 constexpr double kCloudLo[2] = { std::log10(0.5), std::log10(0.05) };
 constexpr double kCloudHi[2] = { std::log10(2.0), std::log10(5.0) };
-/// Upper bound of a layer's self-inhibition (MODEL.md 10). On a uniform
-/// patch the density is D e^(-a D) for the uninhibited D, at most 1 / (a e):
-/// a = 1 keeps net densities up to 0.37 reachable, and higher a none that
-/// a datasheet quotes.
-constexpr double kSelfInhibitionHi = 1.0;
-/// Where it starts: 0.1 (P falls by a tenth at net density 1; net density
-/// 3.7 reachable).
+/// Upper bound of a layer's self-inhibition a (MODEL.md 10) in a stock
+/// whose densities are clamped at max_density M. On a uniform patch the
+/// layer's density above base is S exp(-a min(S, M)) for the uninhibited
+/// S (Dbar is an expected density, clamped as every density is, MODEL.md
+/// 5), whose slope exp(-a S) (1 - a S) is negative where a S > 1: with
+/// a > 1 / M the characteristic curve falls with exposure somewhere below
+/// the clamp, then rises again once Dbar is clamped. a <= 1 / M keeps every
+/// curve rising.
+double self_inhibition_hi(const Stock& stock) { return 1.0 / stock.max_density; }
+/// Where it starts: 0.1 (P falls by a tenth at density 1 above base).
 constexpr double kSelfInhibitionStart = 0.1;
 /// Bounds of the rate search, log10 per second: k_pair, k_join, k_loss.
 constexpr double kRateLo[3] = { 3.0, 2.0, -3.0 };
@@ -251,9 +254,9 @@ public:
             }
         }
         if (inh) {
-            x0[nd] = std::clamp(m_stock.inhibition[l][l], 0.0, kSelfInhibitionHi);
+            x0[nd] = std::clamp(m_stock.inhibition[l][l], 0.0, self_inhibition_hi(m_stock));
             lo[nd] = 0.0;
-            hi[nd] = kSelfInhibitionHi;
+            hi[nd] = self_inhibition_hi(m_stock);
         }
         const auto set_layer = [&](Stock& stock, const std::vector<double>& x) {
             Layer& layer = stock.layers[l];

@@ -98,8 +98,9 @@ struct FitOptions {
     CloudProfile cloud_profile = CloudProfile::gaussian;
     /// Development inhibitors (MODEL.md 10, DIR couplers): each layer's
     /// self-inhibition inhibition[l][l] is searched with its populations
-    /// (in [0, 1]; it lowers development where the layer is dense, the only
-    /// way the model's granularity can fall with density), with the
+    /// (in [0, 1 / max_density], where every characteristic curve still
+    /// rises with exposure; it lowers development where the layer is dense,
+    /// the only way the model's granularity can fall with density), with the
     /// diffusion below (no datasheet figure measures it: a choice, 20 um).
     /// Unset: on for a colour negative datasheet, off for black and white
     /// (a --start stock's own inhibition is then kept).
