@@ -490,9 +490,8 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
         // at net 1.0).
         const double rms = t.granularity.empty() ? 10.0 : t.granularity.front().rms;
         const double d_g = t.granularity.empty() ? 1.0 : t.granularity.front().density;
-        const double aperture_um2 = M_PI / 4.0 * sm::kGranularityApertureUm
-                                    * sm::kGranularityApertureUm;
-        const double a_dev = (rms / 1000.0) * (rms / 1000.0) * aperture_um2 / (kLog10E * d_g);
+        const double a_dev
+            = (rms / 1000.0) * (rms / 1000.0) * sm::kGranularityApertureAreaUm2 / (kLog10E * d_g);
         const double d_dev = std::sqrt(4.0 * a_dev / M_PI);
         for (int p = 0; p < options.populations; ++p) {
             Population pop;
@@ -596,39 +595,23 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
 double smallest_granularity_after(double rms1, double net1_density, double net2_density,
                                   double grains_per_um2, double above_base1_density)
 {
-    const double aperture_um2
-        = M_PI / 4.0 * sm::kGranularityApertureUm * sm::kGranularityApertureUm;
-    const double s1           = rms1 / 1000.0;
-    const double k1           = std::log(10.0) * above_base1_density;  // bounds K_1(0)
+    const double s1 = rms1 / 1000.0;
+    const double k1 = std::log(10.0) * above_base1_density;  // bounds K_1(0)
     // sigma_2^2 >= g(r): the first term rises with r, the second falls
-    // (r <= 1 < net2 / net1); a log grid, then a golden section around its
-    // smallest node.
+    // (r <= 1 < net2 / net1); the smallest over a fine grid in log r
+    // (steps of 1e-3: g's minimum is flat to far below the bound's use).
     const auto g = [&](double log_r) {
         const double r     = std::exp(log_r);
         const double first = std::isfinite(k1) ? r * std::exp(-(1.0 - r) * k1) * s1 * s1 : 0.0;
         const double d     = net2_density - r * net1_density;
-        return first + d * d / (r * grains_per_um2 * aperture_um2);
+        return first + d * d / (r * grains_per_um2 * sm::kGranularityApertureAreaUm2);
     };
-    constexpr int kNodes  = 2000;
-    constexpr double kLo  = -40.0;  // r = 4e-18: below it the second term only grows
-    const double step     = -kLo / kNodes;
-    int best              = 0;
-    double best_g         = g(kLo);
+    constexpr int kNodes = 40000;
+    constexpr double kLo = -40.0;  // r = 4e-18: below it the second term only grows
+    double best_g        = g(kLo);
     for (int n = 1; n <= kNodes; ++n)
-        if (const double v = g(kLo + n * step); v < best_g) {
-            best_g = v;
-            best   = n;
-        }
-    double lo = kLo + std::max(0, best - 1) * step, hi = kLo + std::min(kNodes, best + 1) * step;
-    const double phi = (std::sqrt(5.0) - 1.0) / 2.0;
-    for (int it = 0; it < 60; ++it) {
-        const double a = hi - phi * (hi - lo), b = lo + phi * (hi - lo);
-        if (g(a) < g(b))
-            hi = b;
-        else
-            lo = a;
-    }
-    return 1000.0 * std::sqrt(std::min(best_g, g(0.5 * (lo + hi))));
+        best_g = std::min(best_g, g(kLo - kLo * n / kNodes));
+    return 1000.0 * std::sqrt(best_g);
 }
 
 double smallest_falling_miss(double t1, double net1_density, double t2, double net2_density,
@@ -659,7 +642,7 @@ std::vector<std::string> model_limits(const sm::Datasheet& sheet, bool inhibited
         const sm::LayerTargets& t = sheet.layers[i];
         // The D-min the net densities stand on (needed to read gross targets
         // as net and to bound the density above base); NAN if unknown.
-        const double d_min = t.d_min ? *t.d_min : t.curve.empty() ? NAN : t.curve_d_min();
+        const double d_min = t.d_min || !t.curve.empty() ? t.curve_d_min() : NAN;
         // The worst falling pair (one reading: net or gross alike, by
         // density as the datasheet states them).
         double worst = 0.0;

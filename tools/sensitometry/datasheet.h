@@ -51,6 +51,9 @@ namespace filmgrain::sensitometry {
 inline constexpr double kDatasheetShutterS = 1e-2;
 /// Diameter of the granularity aperture, micrometres.
 inline constexpr double kGranularityApertureUm = 48.0;
+/// Its area, um^2.
+inline constexpr double kGranularityApertureAreaUm2
+    = 3.14159265358979323846 / 4.0 * kGranularityApertureUm * kGranularityApertureUm;
 
 /// One RMS granularity target.
 struct GranularityTarget {
