@@ -1,7 +1,8 @@
 // The calibrated stocks (issue 10). Tolerances are the issue's (speed 1/3
 // stop, slope 0.05, D-min 0.03, RMS granularity 10%, reciprocity 1/3 stop
-// and 1/6 stop inside none_between), never widened. The figures are
-// analytic (expected curves and the Boolean model's aperture variance):
+// and 1/6 stop inside none_between; ours for what it names none: each half
+// of the slope's range 0.1, a datasheet curve's points 0.1 density), never
+// widened. The figures are analytic (expected curves and the Boolean model's aperture variance):
 // deterministic, with the chain tables' fixed Monte Carlo streams; each
 // comes with the bound its table error implies, printed beside it (the
 // render-based check of the same figures is docs/stocks/*/render_check.md).
@@ -68,19 +69,21 @@ void check_builtin(const std::string& preset, const std::string& sheet_file,
 
 TEST(BuiltInStocks, TriX400MeetsItsDatasheet)
 {
-    // speed, D-min, slope, RMS at net 1.0, reciprocity at 1e-3, 0.1, 1,
-    // 10 and 100 s.
-    check_builtin("tri-x-400", "kodak-tri-x-400.json", 9);
+    // speed, D-min, slope and its two halves, RMS at net 1.0, reciprocity
+    // at 1e-3, 0.1, 1, 10 and 100 s.
+    check_builtin("tri-x-400", "kodak-tri-x-400.json", 11);
 }
 
 TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 {
     // As Tri-X, plus reciprocity at 1e-4 s.
-    check_builtin("t-max-100", "kodak-t-max-100.json", 10);
+    check_builtin("t-max-100", "kodak-t-max-100.json", 12);
 }
 
 // The colour stocks (dye clouds, self-inhibition) meet speed, every slope,
-// D-min and reciprocity figure, but not the granularities named here
+// D-min and reciprocity figure, but not the granularities named here, nor
+// the named halves of the slope's range (fitted before the halves were a
+// figure: 500T's and 250D's blue curves are steeper in the first half)
 // (VISION3's falls with density; inhibition lets a layer's fall only as
 // steeply as its grains allow, fit::model_limits, and the search's
 // compromise misses these) nor the named points of the datasheet's
@@ -88,10 +91,11 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 // above log H 0, by 0.10-0.19); the README and docs/stocks say so.
 TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 {
-    // speed, per layer D-min, slope, RMS at net 0.5 / 1 / 1.5 and 19
-    // curve points, reciprocity at 1e-3, 0.1 and 1 s.
-    check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 76,
-                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5", "G RMS at net 1",
+    // speed, per layer D-min, slope and its halves, RMS at net 0.5 / 1 /
+    // 1.5 and 19 curve points, reciprocity at 1e-3, 0.1 and 1 s.
+    check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 82,
+                  { "B slope [-2, -1.5]", "B slope [-1.5, -1]", "R RMS at net 0.5",
+                    "R RMS at net 1.5", "G RMS at net 0.5", "G RMS at net 1",
                     "B RMS at net 0.5", "R D at log H 1", "G D at log H -2.5", "G D at log H 0",
                     "G D at log H 0.75", "G D at log H 1", "B D at log H 1" });
 }
@@ -99,8 +103,10 @@ TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
 {
     // As 500T with 20 curve points a layer.
-    check_builtin("vision3-250d", "kodak-vision3-250d-5207.json", 79,
-                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5", "B RMS at net 1.5",
+    check_builtin("vision3-250d", "kodak-vision3-250d-5207.json", 85,
+                  { "G slope [-2.02, -1.515]", "B slope [-2.02, -1.515]",
+                    "B slope [-1.515, -1.01]", "R RMS at net 0.5", "R RMS at net 1.5",
+                    "G RMS at net 0.5", "B RMS at net 1.5",
                     "R D at log H -2.5", "R D at log H 0.86", "R D at log H 1.1",
                     "G D at log H -2.5", "G D at log H -2.26", "G D at log H 0.14",
                     "G D at log H 0.86", "G D at log H 1.1", "B D at log H -2.26",
@@ -223,7 +229,7 @@ TEST(Fitter, RecoversAPerturbedSyntheticTarget)
     const Status s = fit::fit_stock(sheet, o, r);
     ASSERT_TRUE(s) << s.message();
     std::cout << fit::comparison_table(r.comparisons);
-    EXPECT_EQ(r.comparisons.size(), 5u);
+    EXPECT_EQ(r.comparisons.size(), 7u);  // speed, D-min, slope and its halves, 2 RMS
     expect_all_met(r.comparisons, "synthetic");
 
     // Deterministic for a seed.

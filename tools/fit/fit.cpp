@@ -127,8 +127,11 @@ double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::Datasheet
     if (sheet.speed)
         j += curve_miss(kStopsPerDecade * (l.speed_log10_h.value - target_speed_log10_h(sheet))
                         / tol.speed_stops);
-    if (t.slope)
+    if (t.slope) {
         j += curve_miss((l.slope.value - *t.slope) / tol.slope);
+        for (const sm::Figure& half : l.slope_halves)
+            j += curve_miss((half.value - *t.slope) / tol.slope_half);
+    }
     for (size_t g = 0; g < t.granularity.size(); ++g) {
         const double r = (l.granularity[g].value / t.granularity[g].rms - 1.0) / tol.granularity_rel;
         j += r * r;
@@ -531,6 +534,15 @@ Status measure(const Stock& stock, const sm::Datasheet& sheet, const ExpectedCur
         return s;
     comparisons = sm::compare_figures(sheet, figures);
     return {};
+}
+
+Status granularity_curve(const Stock& stock, const sm::Datasheet& sheet,
+                         const ExpectedCurveOptions& curve,
+                         const std::vector<double>& net_densities,
+                         std::vector<std::vector<std::pair<double, sm::Figure>>>& out)
+{
+    DevelopModels models(stock, curve);
+    return sm::granularity_against_density(stock, sheet, models, net_densities, out);
 }
 
 Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResult& out)

@@ -135,6 +135,13 @@ Status measure(const Stock& stock, const sensitometry::Datasheet& sheet,
                const ExpectedCurveOptions& curve, sensitometry::DatasheetFigures& figures,
                std::vector<sensitometry::Comparison>& comparisons);
 
+/// `stock`'s RMS granularity against net density at `curve` precision
+/// (sensitometry::granularity_against_density).
+Status granularity_curve(const Stock& stock, const sensitometry::Datasheet& sheet,
+                         const ExpectedCurveOptions& curve,
+                         const std::vector<double>& net_densities,
+                         std::vector<std::vector<std::pair<double, sensitometry::Figure>>>& out);
+
 /// Most grains per um^2 the search gives one population (the fit's
 /// real-emulsion bound; the stock format allows 100).
 inline constexpr double kMaxGrainsPerPopulationPerUm2 = 15.0;

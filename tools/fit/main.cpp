@@ -31,7 +31,8 @@ void usage(std::ostream& os)
           "every candidate analytically the datasheet way (tools/sensitometry/datasheet.h).\n"
           "  -o FILE            write the fitted stock (JSON, every key) to FILE\n"
           "  --report DIR       write report.md (target vs achieved, every figure),\n"
-          "                     figures.json and curves.csv to DIR (created)\n"
+          "                     figures.json, curves.csv and granularity.csv to DIR\n"
+          "                     (created); tools/fit/plot_report.py DIR DATASHEET plots them\n"
           "  --measure STOCK    measure a stock (file or built-in preset) instead of fitting\n"
           "  --seed N           multi-start seed; the fit is deterministic for it (default "
        << d.seed
@@ -118,6 +119,26 @@ Status write_curves(const Stock& stock, const sm::Datasheet& sheet,
     return out ? Status() : Status::errorf("cannot write ", path);
 }
 
+/// granularity.csv: each datasheet layer's RMS granularity against net
+/// density at 1/100 s, every 0.05 from 0.05 to 3 where its curve reaches.
+Status write_granularity(const Stock& stock, const sm::Datasheet& sheet,
+                         const filmgrain::ExpectedCurveOptions& curve, const std::string& path)
+{
+    std::vector<double> nets;
+    for (int k = 1; k <= 60; ++k)
+        nets.push_back(0.05 * k);
+    std::vector<std::vector<std::pair<double, sm::Figure>>> g;
+    if (Status s = filmgrain::fit::granularity_curve(stock, sheet, curve, nets, g); !s)
+        return s;
+    std::ofstream out(path);
+    out << "layer,net_density,rms_granularity,error\n";
+    for (size_t i = 0; i < g.size(); ++i)
+        for (const auto& [net, rms] : g[i])
+            out << sheet.layers[i].name << "," << net << "," << rms.value << "," << rms.error
+                << "\n";
+    return out ? Status() : Status::errorf("cannot write ", path);
+}
+
 nlohmann::json figures_json(const sm::DatasheetFigures& f,
                             const std::vector<sm::Comparison>& comparisons)
 {
@@ -128,6 +149,9 @@ nlohmann::json figures_json(const sm::DatasheetFigures& f,
         nlohmann::json jl = { { "name", l.name },
                               { "d_min", { l.d_min.value, l.d_min.error } },
                               { "slope", { l.slope.value, l.slope.error } },
+                              { "slope_halves",
+                                { { l.slope_halves[0].value, l.slope_halves[0].error },
+                                  { l.slope_halves[1].value, l.slope_halves[1].error } } },
                               { "speed_log10_h", { l.speed_log10_h.value, l.speed_log10_h.error } } };
         for (const auto& g : l.granularity)
             jl["rms_granularity"].push_back({ g.value, g.error });
@@ -376,6 +400,10 @@ int main(int argc, char** argv)
         j["fit_seconds"] = fit_seconds;
         std::ofstream(report_dir + "/figures.json") << j.dump(2) << "\n";
         if (Status s = write_curves(stock, sheet, opt.final_curve, report_dir + "/curves.csv"); !s)
+            std::cerr << "filmgrain-fit: " << s.message() << "\n";
+        if (Status s = write_granularity(stock, sheet, opt.final_curve,
+                                         report_dir + "/granularity.csv");
+            !s)
             std::cerr << "filmgrain-fit: " << s.message() << "\n";
     }
     if (check) {

@@ -252,6 +252,34 @@ Curves curves_at(const Stock& stock, double shutter_s, DevelopModels& models)
     return c;
 }
 
+/// The RMS granularity (1000 sigma_D, kGranularityApertureUm) of stock
+/// layer l at gross `density` on `ref`'s curves, with its error bound;
+/// false where the curve never reaches the density.
+bool rms_granularity_at(const Stock& stock, const Curves& ref, size_t l, double density,
+                        Figure& out)
+{
+    const ExpectedCurve& c = ref.curves[l];
+    const double v         = c.value_at_density(density);
+    if (!(v > 0.0) || v >= c.points.back().value)
+        return false;
+    // MODEL.md 10: P -> P exp(-log_factor) for every grain.
+    const BooleanLayer b = boolean_layer_at(ref.models[l]->populations(), v,
+                                            ImageOverlap(stock.layers[l]),
+                                            std::exp(-neutral_log_factor(stock, ref.plain, l, v)));
+    const double sigma_t
+        = std::sqrt(disc_aperture_transmittance_variance(b, kGranularityApertureUm));
+    const double rms = 1000.0 * kLog10E * sigma_t / b.mean_transmittance();
+    // C(h) = T^2 (exp K(h) - 1) scales with K to first order: the relative
+    // error of K bounds the relative error of the variance, half that of
+    // sigma. (coverage_error bounds sum n E[a P]; a dye image blocks
+    // cloud_area_factor times that.)
+    const double rel = b.coverage() > 0.0 ? 0.5 * ref.models[l]->coverage_error()
+                                                * cloud_area_factor(stock.layers[l]) / b.coverage()
+                                          : 0.0;
+    out = { rms, rms * rel };
+    return true;
+}
+
 /// Index of the stock layer named `name`, or -1.
 int find_layer(const Stock& stock, const std::string& name)
 {
@@ -409,33 +437,22 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             const double span = t.slope_log10_h_hi - t.slope_log10_h_lo;
             f.slope = { (d_at(t.slope_log10_h_hi) - d_at(t.slope_log10_h_lo)) / span,
                         2.0 * c.density_error / span };
+            const double mid = 0.5 * (t.slope_log10_h_lo + t.slope_log10_h_hi);
+            f.slope_halves[0] = { (d_at(mid) - d_at(t.slope_log10_h_lo)) / (0.5 * span),
+                                  4.0 * c.density_error / span };
+            f.slope_halves[1] = { (d_at(t.slope_log10_h_hi) - d_at(mid)) / (0.5 * span),
+                                  4.0 * c.density_error / span };
         }
         for (const auto& point : t.curve)
             f.curve.push_back({ d_at(point.first), c.density_error });
         if (options.granularity)
             for (const GranularityTarget& g : t.granularity) {
                 const double density = g.net ? c.min_density() + g.density : g.density;
-                const double v       = c.value_at_density(density);
-                if (!(v > 0.0) || v >= c.points.back().value)
+                Figure rms;
+                if (!rms_granularity_at(stock, ref, l, density, rms))
                     return Status::errorf("layer ", t.name, ": density ", density,
                                           " (granularity target) is never reached");
-                // MODEL.md 10: P -> P exp(-log_factor) for every grain.
-                const BooleanLayer b = boolean_layer_at(
-                    ref.models[l]->populations(), v, ImageOverlap(stock.layers[l]),
-                    std::exp(-neutral_log_factor(stock, ref.plain, l, v)));
-                const double sigma_t = std::sqrt(disc_aperture_transmittance_variance(
-                    b, kGranularityApertureUm));
-                const double rms     = 1000.0 * kLog10E * sigma_t / b.mean_transmittance();
-                // C(h) = T^2 (exp K(h) - 1) scales with K to first order:
-                // the relative error of K bounds the relative error of the
-                // variance, half that of sigma.
-                // (coverage_error bounds sum n E[a P]; a dye image blocks
-                // cloud_area_factor times that.)
-                const double rel = b.coverage() > 0.0
-                                       ? 0.5 * ref.models[l]->coverage_error()
-                                             * cloud_area_factor(stock.layers[l]) / b.coverage()
-                                       : 0.0;
-                f.granularity.push_back({ rms, rms * rel });
+                f.granularity.push_back(rms);
             }
         out.layers.push_back(std::move(f));
     }
@@ -469,6 +486,28 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             }
             out.reciprocity.emplace_back(t, worst);
             out.reciprocity_layer_stops.push_back(std::move(per_layer));
+        }
+    }
+    return {};
+}
+
+Status granularity_against_density(const Stock& stock, const Datasheet& sheet,
+                                   DevelopModels& models, const std::vector<double>& net_densities,
+                                   std::vector<std::vector<std::pair<double, Figure>>>& out)
+{
+    out.clear();
+    const Curves ref = curves_at(stock, kDatasheetShutterS, models);
+    for (const LayerTargets& t : sheet.layers) {
+        const int l = find_layer(stock, t.name);
+        if (l < 0)
+            return Status::errorf("the datasheet's layer '", t.name, "' is not in stock '",
+                                  stock.name, "'");
+        const double d_min = ref.curves[static_cast<size_t>(l)].min_density();
+        out.emplace_back();
+        for (double net : net_densities) {
+            Figure rms;
+            if (rms_granularity_at(stock, ref, static_cast<size_t>(l), d_min + net, rms))
+                out.back().emplace_back(net, rms);
         }
     }
     return {};
@@ -526,11 +565,20 @@ std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetF
         if (t.d_min)
             out.push_back({ t.name + " D-min", *t.d_min, f.d_min.value, f.d_min.error,
                             std::fabs(f.d_min.value - *t.d_min), tol.d_min, "density" });
-        if (t.slope)
+        if (t.slope) {
             out.push_back({ t.name + " slope [" + fmt(t.slope_log10_h_lo) + ", "
                                 + fmt(t.slope_log10_h_hi) + "]",
                             *t.slope, f.slope.value, f.slope.error,
                             std::fabs(f.slope.value - *t.slope), tol.slope, "gamma" });
+            const double ends[3] = { t.slope_log10_h_lo,
+                                     0.5 * (t.slope_log10_h_lo + t.slope_log10_h_hi),
+                                     t.slope_log10_h_hi };
+            for (int h = 0; h < 2; ++h)
+                out.push_back({ t.name + " slope [" + fmt(ends[h]) + ", " + fmt(ends[h + 1]) + "]",
+                                *t.slope, f.slope_halves[h].value, f.slope_halves[h].error,
+                                std::fabs(f.slope_halves[h].value - *t.slope), tol.slope_half,
+                                "gamma" });
+        }
         for (size_t g = 0; g < t.granularity.size() && g < f.granularity.size(); ++g) {
             const GranularityTarget& gt = t.granularity[g];
             out.push_back({ t.name + " RMS at " + (gt.net ? "net " : "gross ") + fmt(gt.density),

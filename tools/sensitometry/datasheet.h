@@ -113,6 +113,9 @@ struct DatasheetFigures {
         std::string name;
         Figure d_min;
         Figure slope;
+        /// The slope over each half of the slope's range: a straight line's
+        /// are the slope itself.
+        Figure slope_halves[2];
         Figure speed_log10_h;  ///< this layer's speed point
         std::vector<Figure> granularity;  ///< one per target, 1000 sigma_D
         std::vector<Figure> curve;        ///< gross density at each curve point
@@ -140,6 +143,15 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                  DevelopModels& models, const FigureOptions& options,
                                  DatasheetFigures& out);
 
+/// The RMS granularity of each of `sheet`'s layers at every net density in
+/// `net_densities` (at 1/100 s; the figure measure_datasheet_figures gives
+/// at a granularity target): out[i] holds (net density, figure) for the
+/// densities datasheet layer i reaches. Errors: a datasheet layer the stock
+/// does not have.
+Status granularity_against_density(const Stock& stock, const Datasheet& sheet,
+                                   DevelopModels& models, const std::vector<double>& net_densities,
+                                   std::vector<std::vector<std::pair<double, Figure>>>& out);
+
 /// How far `stock` falls short of the densities `sheet`'s targets need
 /// (each layer's speed point, granularity densities and curve points above
 /// D-min) at 1/100 s: the largest needed density less the layer's largest,
@@ -161,6 +173,12 @@ double log10_exposure_at_density(const ExpectedCurve& curve, double sensitivity_
 struct Tolerances {
     double speed_stops       = 1.0 / 3.0;
     double slope             = 0.05;
+    /// Each half of the slope's range against the datasheet's slope, which
+    /// it gives as a straight line's (our choice: twice the slope's
+    /// tolerance, as a half range's slope has twice the error of the whole
+    /// range's for the same density error; the VISION3 datasheets' own
+    /// curves are straight within 0.01 there).
+    double slope_half        = 0.1;
     double d_min             = 0.03;
     double curve_density     = 0.1;
     double granularity_rel   = 0.10;
