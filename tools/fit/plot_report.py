@@ -10,12 +10,13 @@ to, and writes into REPORT_DIR:
                    datasheet's curve points, speed points and slope ranges;
   granularity.png  each layer's RMS granularity against net density (48 um
                    aperture, with its error bound), the datasheet's targets
-                   with issue 10's 10% tolerance;
+                   with their tolerance;
   reciprocity.png  the extra exposure each layer needs at each time for the
                    speed point's density, the datasheet's targets with their
-                   1/3 stop tolerance and its no-failure range (1/6 stop).
-Nothing here measures: every number is the fitter's (one implementation of
-each figure, tools/sensitometry/datasheet.h).
+                   tolerance and its no-failure range.
+Nothing here measures: every number and tolerance is the fitter's, read
+from figures.json (one implementation of each figure and tolerance,
+tools/sensitometry/datasheet.h).
 """
 import csv
 import json
@@ -29,14 +30,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 DPI = 90
 COLOURS = {"R": "#c0392b", "G": "#27ae60", "B": "#2c6fbb", "Y": "#222222"}
-# Issue 10's tolerances (tools/sensitometry/datasheet.h, Tolerances).
-GRANULARITY_REL = 0.10
-RECIPROCITY_STOPS = 1.0 / 3.0
-NONE_STOPS = 1.0 / 6.0
 
 
 def colour(layer):
     return COLOURS.get(layer, None)
+
+
+def tolerance(figures, match):
+    """The tolerance of the first compared figure for which match(comparison)
+    holds (figures.json's comparisons, as the fitter compared them)."""
+    for c in figures["comparisons"]:
+        if match(c):
+            return c["tolerance"]
+    return None
 
 
 def finish(fig, ax, out_dir, name, title, ncol=2, which="major"):
@@ -85,6 +91,8 @@ def plot_curves(out_dir, sheet, figures):
 
 def plot_granularity(out_dir, sheet, figures):
     rows = read_csv(os.path.join(out_dir, "granularity.csv"))
+    rel = tolerance(figures, lambda c: " RMS at " in c["figure"])
+    d_min = {layer["name"]: layer["d_min"][0] for layer in figures["layers"]}
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for t in sheet["layers"]:
         name = t["name"]
@@ -98,15 +106,14 @@ def plot_granularity(out_dir, sheet, figures):
         ax.fill_between(x, [a - b for a, b in zip(y, e)], [a + b for a, b in zip(y, e)],
                         color=c or "grey", alpha=0.2, lw=0)
         g = t.get("rms_granularity", {})
-        if "gross_density" in g:
-            d_min = t.get("d_min", 0.0)
-            targets = [(float(k) - d_min, v) for k, v in g["gross_density"].items()]
+        if "gross_density" in g:  # on the net axis: above the model's D-min
+            targets = [(float(k) - d_min[name], v) for k, v in g["gross_density"].items()]
         else:
             targets = [(float(k), v) for k, v in g.get("net_density", {}).items()]
         if targets:
             ax.errorbar([p[0] for p in targets], [p[1] for p in targets],
-                        yerr=[GRANULARITY_REL * p[1] for p in targets], fmt="s", mfc="none",
-                        color=c, capsize=3, label=f"{name} datasheet +-10%")
+                        yerr=[rel * p[1] for p in targets], fmt="s", mfc="none",
+                        color=c, capsize=3, label=f"{name} datasheet +-{100 * rel:g}%")
     ax.set_xlabel("net density (above D-min), 1/100 s")
     ax.set_ylabel("RMS granularity (1000 sigma_D, 48 um)")
     ax.set_ylim(bottom=0)
@@ -129,13 +136,16 @@ def plot_reciprocity(out_dir, sheet, figures):
                 label=f"{name} model")
     lo, hi = target.get("none_between", [None, None])
     if lo is not None:
-        ax.fill_between([lo, hi], [-NONE_STOPS] * 2, [NONE_STOPS] * 2, color="grey",
-                        alpha=0.2, lw=0, label="datasheet: none (+-1/6 stop)")
+        none = tolerance(figures, lambda c: c["figure"].endswith("(none)"))
+        ax.fill_between([lo, hi], [-none] * 2, [none] * 2, color="grey",
+                        alpha=0.2, lw=0, label=f"datasheet: none (+-{none:.3g} stop)")
     extra = target.get("extra_stops", {})
     if extra:
+        tol = tolerance(figures, lambda c: c["figure"].startswith("reciprocity")
+                        and not c["figure"].endswith("(none)"))
         ts = [float(k) for k in extra]
-        ax.errorbar(ts, list(extra.values()), yerr=RECIPROCITY_STOPS, fmt="s", mfc="none",
-                    color="black", capsize=3, label="datasheet +-1/3 stop")
+        ax.errorbar(ts, list(extra.values()), yerr=tol, fmt="s", mfc="none",
+                    color="black", capsize=3, label=f"datasheet +-{tol:.3g} stop")
     ax.set_xscale("log")
     ax.axhline(0.0, color="black", lw=0.5)
     ax.set_xlabel(f"exposure time, s (reference {target.get('reference_s', 0.01)} s)")

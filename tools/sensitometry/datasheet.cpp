@@ -437,7 +437,7 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             const double span = t.slope_log10_h_hi - t.slope_log10_h_lo;
             f.slope = { (d_at(t.slope_log10_h_hi) - d_at(t.slope_log10_h_lo)) / span,
                         2.0 * c.density_error / span };
-            const double mid = 0.5 * (t.slope_log10_h_lo + t.slope_log10_h_hi);
+            const double mid  = t.slope_log10_h_mid();
             f.slope_halves[0] = { (d_at(mid) - d_at(t.slope_log10_h_lo)) / (0.5 * span),
                                   4.0 * c.density_error / span };
             f.slope_halves[1] = { (d_at(t.slope_log10_h_hi) - d_at(mid)) / (0.5 * span),
@@ -570,8 +570,7 @@ std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetF
                                 + fmt(t.slope_log10_h_hi) + "]",
                             *t.slope, f.slope.value, f.slope.error,
                             std::fabs(f.slope.value - *t.slope), tol.slope, "gamma" });
-            const double ends[3] = { t.slope_log10_h_lo,
-                                     0.5 * (t.slope_log10_h_lo + t.slope_log10_h_hi),
+            const double ends[3] = { t.slope_log10_h_lo, t.slope_log10_h_mid(),
                                      t.slope_log10_h_hi };
             for (int h = 0; h < 2; ++h)
                 out.push_back({ t.name + " slope [" + fmt(ends[h]) + ", " + fmt(ends[h + 1]) + "]",

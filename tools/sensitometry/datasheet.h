@@ -68,6 +68,8 @@ struct LayerTargets {
     std::optional<double> d_min;
     std::optional<double> slope;
     double slope_log10_h_lo = 0.0, slope_log10_h_hi = 0.0;
+    /// The middle of the slope's range (its halves are figures too).
+    double slope_log10_h_mid() const { return 0.5 * (slope_log10_h_lo + slope_log10_h_hi); }
     std::vector<GranularityTarget> granularity;
     /// Points of the characteristic curve: (absolute log10 H, lux-seconds;
     /// gross density), increasing log10 H.
