@@ -12,6 +12,7 @@
 #include <set>
 
 #include "fit.h"
+#include "filmgrain/render.h"
 
 namespace filmgrain {
 namespace {
@@ -366,6 +367,56 @@ TEST(Fitter, NoStockFallsBelowTheGranularityBound)
     }
     // The check covers falls, not only rising pairs.
     EXPECT_GE(falling, 2);
+}
+
+// The render check renders a layer alone where no other layer inhibits it
+// (fit::layer_alone): that layer's image must be the one it has in the
+// whole stock. Grains are numbered per layer index, so on the same frame
+// and scan layer 0 alone is bit for bit layer 0 of the whole stock (exact
+// engine, a 40 um frame of vision3-500t at 2 um pixels, some 1e5 red
+// grains, self-inhibition on); a layer that another inhibits is not
+// reduced.
+TEST(Fitter, RenderCheckRendersALayerAloneAsInTheWholeStock)
+{
+    Stock stock;
+    ASSERT_TRUE(load_stock("vision3-500t", stock));
+    ASSERT_TRUE(stock.inhibits());
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        EXPECT_TRUE(fit::layer_develops_alone(stock, l)) << l;
+    const Stock red = fit::layer_alone(stock, 0);
+    ASSERT_EQ(red.layers.size(), 1u);
+    ASSERT_TRUE(red.validate());
+    EXPECT_EQ(red.inhibition[0][0], stock.inhibition[0][0]);
+
+    const float grey = 0.18f;
+    const ImageView input { &grey, 1, 1, 1 };
+    SceneSettings scene;
+    scene.exposure_stops = 2.0;
+    scene.frame_width_mm = 0.04;
+    scene.seed           = 7;
+    RenderSettings rs;
+    rs.engine      = Engine::exact;
+    rs.nthreads    = 2;
+    rs.scan_width  = 20;
+    rs.scan_height = 20;
+    const size_t n = 20 * 20, nl = stock.layers.size();
+    std::vector<float> whole(n * nl), alone(n);
+    ASSERT_TRUE(render_negative(stock, scene, input, rs, whole.data(), nullptr));
+    ASSERT_TRUE(render_negative(red, scene, input, rs, alone.data(), nullptr));
+    size_t differ = 0;
+    double developed = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        differ += alone[i] != whole[i * nl] ? 1 : 0;
+        developed += (alone[i] - red.layer_base_density(0)) / static_cast<double>(n);
+    }
+    EXPECT_EQ(differ, 0u) << "pixels of the red layer that differ, of " << n;
+    // Not a blank frame (two blank images would prove nothing).
+    EXPECT_GT(developed, 0.1);
+
+    Stock coupled = stock;
+    coupled.inhibition[0][2] = 0.1;
+    EXPECT_FALSE(fit::layer_develops_alone(coupled, 0));
+    EXPECT_TRUE(fit::layer_develops_alone(coupled, 2));
 }
 
 }  // namespace

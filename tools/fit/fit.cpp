@@ -725,7 +725,37 @@ bool RenderCheckRow::agrees() const
     return std::fabs(rendered - analytic) <= 3.0 * rendered_se + analytic_error;
 }
 
-Status render_check(const Stock& stock, const sm::Datasheet& sheet,
+std::string RenderCheckRow::line() const
+{
+    std::ostringstream o;
+    o << figure << ": analytic " << format(analytic) << " (bound " << format(analytic_error, 2)
+      << "), rendered " << format(rendered) << " +- " << format(rendered_se, 2) << ", z "
+      << format(rendered_se > 0.0 ? (rendered - analytic) / rendered_se : 0.0, 3) << ", "
+      << (agrees() ? "agrees" : "DISAGREES");
+    return o.str();
+}
+
+bool layer_develops_alone(const Stock& stock, size_t layer)
+{
+    if (!stock.inhibits())
+        return true;
+    const std::vector<double>& row = stock.inhibition[layer];
+    for (size_t j = 0; j < row.size(); ++j)
+        if (j != layer && row[j] != 0.0)
+            return false;
+    return true;
+}
+
+Stock layer_alone(const Stock& stock, size_t layer)
+{
+    Stock one  = stock;
+    one.layers = { stock.layers[layer] };
+    if (stock.inhibits())
+        one.inhibition = { { stock.inhibition[layer][layer] } };
+    return one;
+}
+
+Status render_check(const Stock& full_stock, const sm::Datasheet& sheet,
                     const sm::DatasheetFigures& figures, uint64_t seed, int nthreads,
                     const std::function<void(const std::string&)>& progress,
                     std::vector<RenderCheckRow>& out)
@@ -737,6 +767,10 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
     const bool iso5800    = sheet.speed_standard == "ISO 5800";
     const double crit_net = iso5800 ? sm::kIso5800SpeedNetDensity : sm::kIso6SpeedNetDensity;
     uint64_t patch        = 0;
+    // The stock each patch renders: the whole stock, or only the checked
+    // layer where no other layer inhibits it (the same image of that layer
+    // in distribution, a third of a colour stock's work).
+    Stock stock = full_stock;
     const auto expose = [&](double log10_h, double shutter_s, double side_um, double pitch_um,
                             sm::PatchReading& r, std::vector<std::vector<double>>* t) {
         sm::PatchSpec p;
@@ -756,15 +790,23 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
         const sm::LayerTargets& t         = sheet.layers[i];
         const sm::DatasheetFigures::Layer& f = figures.layers[i];
         size_t l = 0;
-        while (stock.layers[l].name != t.name)
+        while (full_stock.layers[l].name != t.name)
             ++l;
+        if (layer_develops_alone(full_stock, l)) {
+            stock = layer_alone(full_stock, l);
+            l     = 0;
+        } else {
+            stock = full_stock;
+        }
+        say("  render check: layer " + t.name
+            + (stock.layers.size() == 1 ? " rendered alone" : " rendered with every layer"));
         // D-min: the unexposed patch.
         sm::PatchReading fog;
         if (Status s = expose(-INFINITY, sm::kDatasheetShutterS, 1000.0, 8.0, fog, nullptr); !s)
             return s;
         const sm::LayerReading& fr = fog.layers[l];
         out.push_back({ t.name + " D-min", f.d_min.value, f.d_min.error, fr.density, fr.density_se });
-        say("  render check: " + out.back().figure);
+        say("  render check: " + out.back().line());
         // The speed point: net density crit_net at H_m.
         sm::PatchReading sp;
         if (Status s = expose(f.speed_log10_h.value, sm::kDatasheetShutterS, 1000.0, 8.0, sp, nullptr); !s)
@@ -772,7 +814,7 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
         const double se_net = std::hypot(sp.layers[l].density_se, fr.density_se);
         out.push_back({ t.name + " net density at the speed point", crit_net, f.d_min.error,
                         sp.layers[l].density - fr.density, se_net });
-        say("  render check: " + out.back().figure);
+        say("  render check: " + out.back().line());
         if (t.slope) {
             sm::PatchReading a, b;
             if (Status s = expose(t.slope_log10_h_lo, sm::kDatasheetShutterS, 600.0, 8.0, a, nullptr); !s)
@@ -783,7 +825,7 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
             out.push_back({ t.name + " slope", f.slope.value, f.slope.error,
                             (b.layers[l].density - a.layers[l].density) / span,
                             std::hypot(a.layers[l].density_se, b.layers[l].density_se) / span });
-            say("  render check: " + out.back().figure);
+            say("  render check: " + out.back().line());
         }
         // Granularity: the exposure at which the analytic curve reaches
         // the target density (the curve at the final precision).
@@ -811,7 +853,7 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
                                     + format(gt.density),
                                 f.granularity[g].value, f.granularity[g].error,
                                 1000.0 * gr.sigma_density, 1000.0 * gr.sigma_density_se });
-                say("  render check: " + out.back().figure);
+                say("  render check: " + out.back().line());
             }
         }
         // Reciprocity: at each time, the analytic shift's exposure must
@@ -828,7 +870,7 @@ Status render_check(const Stock& stock, const sm::Datasheet& sheet,
                                 + " s, +" + format(stops, 3) + " stops",
                             crit_net, f.d_min.error, r.layers[l].density - fr.density,
                             std::hypot(r.layers[l].density_se, fr.density_se) });
-            say("  render check: " + out.back().figure);
+            say("  render check: " + out.back().line());
         }
     }
     return {};

@@ -214,7 +214,20 @@ struct RenderCheckRow {
     /// Agreement: |rendered - analytic| <= 3 rendered_se + analytic_error
     /// (3 standard errors: a two-sided 0.27% chance to fail by noise).
     bool agrees() const;
+    /// The row on one line (the render check's progress).
+    std::string line() const;
 };
+
+/// Whether layer `layer` of `stock` develops independently of the other
+/// layers: no other layer inhibits it (its row of MODEL.md 10's inhibition
+/// is zero but for its own). Every other effect acts within a layer.
+bool layer_develops_alone(const Stock& stock, size_t layer);
+
+/// The stock reduced to layer `layer` (and its own inhibition): rendered,
+/// its one layer is that layer of `stock`, bit for bit for layer 0 (grains
+/// are numbered per layer index) and in distribution for any other, when
+/// layer_develops_alone(stock, layer).
+Stock layer_alone(const Stock& stock, size_t layer);
 
 /// Renders the patches that check `figures` (from measure()) on `stock`:
 /// for every datasheet layer the fog patch (D-min), the speed point (its
@@ -222,8 +235,10 @@ struct RenderCheckRow {
 /// granularity density (1200 um square, 2 um pixels, the 48 um aperture
 /// on the pixel grid every 12 pixels, jackknife standard error) and the
 /// speed point at every reciprocity time (its net density at the exposure
-/// the analytic shift predicts). Deterministic for `seed`. Minutes with
-/// the exact engine at real emulsion scale.
+/// the analytic shift predicts). Deterministic for `seed`. Each layer's
+/// patches render that layer alone where layer_develops_alone. `progress`
+/// receives each row as it is measured. Minutes to hours with the exact
+/// engine at real emulsion scale.
 Status render_check(const Stock& stock, const sensitometry::Datasheet& sheet,
                     const sensitometry::DatasheetFigures& figures, uint64_t seed, int nthreads,
                     const std::function<void(const std::string&)>& progress,
