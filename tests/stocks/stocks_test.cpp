@@ -81,37 +81,33 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
     check_builtin("t-max-100", "kodak-t-max-100.json", 12);
 }
 
-// The colour stocks (dye clouds, self-inhibition) meet speed, every slope,
-// D-min and reciprocity figure, but not the granularities named here, nor
-// the named halves of the slope's range (fitted before the halves were a
-// figure: 500T's and 250D's blue curves are steeper in the first half)
-// (VISION3's falls with density; inhibition lets a layer's fall only as
-// steeply as its grains allow, fit::model_limits, and the search's
-// compromise misses these) nor the named points of the datasheet's
-// characteristic curve (0.1 density, our tolerance: points in the toe and
-// above log H 0, by 0.10-0.19); the README and docs/stocks say so.
+// The colour stocks (dye clouds, self-inhibition) meet speed, every slope
+// and each half of its range, D-min and reciprocity figure, but not the
+// granularities named here (VISION3's falls with density; inhibition lets
+// a layer's fall only as steeply as its grains allow, fit::model_limits,
+// and the search's compromise misses these) nor the named points of the
+// datasheet's characteristic curve (0.1 density, our tolerance: points in
+// the toe and at the top, by 0.10-0.18); the README and docs/stocks say so.
 TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 {
     // speed, per layer D-min, slope and its halves, RMS at net 0.5 / 1 /
     // 1.5 and 19 curve points, reciprocity at 1e-3, 0.1 and 1 s.
     check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 82,
-                  { "B slope [-2, -1.5]", "B slope [-1.5, -1]", "R RMS at net 0.5",
-                    "R RMS at net 1.5", "G RMS at net 0.5", "G RMS at net 1",
-                    "B RMS at net 0.5", "R D at log H 1", "G D at log H -2.5", "G D at log H 0",
-                    "G D at log H 0.75", "G D at log H 1", "B D at log H 1" });
+                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5", "G RMS at net 1",
+                    "B RMS at net 0.5", "R D at log H 1", "G D at log H -2.75",
+                    "B D at log H 1" });
 }
 
 TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
 {
     // As 500T with 20 curve points a layer.
     check_builtin("vision3-250d", "kodak-vision3-250d-5207.json", 85,
-                  { "G slope [-2.02, -1.515]", "B slope [-2.02, -1.515]",
-                    "B slope [-1.515, -1.01]", "R RMS at net 0.5", "R RMS at net 1.5",
-                    "G RMS at net 0.5", "B RMS at net 1.5",
+                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5",
+                    "G RMS at net 1.5", "B RMS at net 0.5", "B RMS at net 1.5",
                     "R D at log H -2.5", "R D at log H 0.86", "R D at log H 1.1",
-                    "G D at log H -2.5", "G D at log H -2.26", "G D at log H 0.14",
-                    "G D at log H 0.86", "G D at log H 1.1", "B D at log H -2.26",
-                    "B D at log H 0.14", "B D at log H 0.86", "B D at log H 1.1" });
+                    "G D at log H -2.5", "G D at log H -2.26", "G D at log H -1.3",
+                    "G D at log H 1.1", "B D at log H -2.5", "B D at log H -2.26",
+                    "B D at log H 1.1" });
 }
 
 // Every built-in stock's characteristic curves rise with exposure: grains
@@ -318,27 +314,30 @@ TEST(Fitter, NoStockFallsBelowTheGranularityBound)
     sheet.has_reciprocity = false;
     Stock base;
     ASSERT_TRUE(load_stock("vision3-500t", base));
-    // The R layer made to fall: a few large fast grains that develop early,
-    // many small slow ones that carry the density above, and strong
-    // self-inhibition that thins the large ones as the layer grows dense.
+    // The R and G layers made to fall: a few large fast grains that
+    // develop early, many small slow ones that carry the density above, and
+    // strong self-inhibition that thins the large ones as the layer grows
+    // dense. (Built here, so that the falls the test needs do not depend on
+    // the built-in stock's fit.)
     std::vector<Stock> stocks(3, base);
     const double self_inhibition[3] = { 0.0, 0.3, 0.45 };
-    for (int v = 1; v < 3; ++v) {
-        Layer& r = stocks[v].layers[0];
-        Population large = r.populations[0], small = r.populations[0];
-        large.grains_per_um2     = 1.0;
-        large.diameter_um        = 1.5;
-        large.diameter_log_sigma = 0.2;
-        large.quantum_efficiency = 0.5;
-        small.grains_per_um2     = 60.0;
-        small.diameter_um        = 0.5;
-        small.diameter_log_sigma = 0.3;
-        small.quantum_efficiency = 0.1;
-        r.populations            = { large, small };
-        r.cloud_diameter_ratio   = 2.0;
-        r.cloud_density          = 1.0;
-        stocks[v].inhibition[0][0] = self_inhibition[v];
-    }
+    for (int v = 1; v < 3; ++v)
+        for (size_t l : { 0, 1 }) {
+            Layer& r         = stocks[v].layers[l];
+            Population large = r.populations[0], small = r.populations[0];
+            large.grains_per_um2       = l == 0 ? 1.0 : 0.7;  // two different falls
+            large.diameter_um          = l == 0 ? 1.5 : 1.8;
+            large.diameter_log_sigma   = 0.2;
+            large.quantum_efficiency   = 0.5;
+            small.grains_per_um2       = 60.0;
+            small.diameter_um          = 0.5;
+            small.diameter_log_sigma   = 0.3;
+            small.quantum_efficiency   = 0.1;
+            r.populations              = { large, small };
+            r.cloud_diameter_ratio     = 2.0;
+            r.cloud_density            = 1.0;
+            stocks[v].inhibition[l][l] = self_inhibition[v];
+        }
     int falling = 0;
     for (const Stock& stock : stocks) {
         sm::DatasheetFigures f;
