@@ -837,7 +837,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             path << ":" << plan.coverage_samples;
         plan.path = path.str();
         if (exact) {
-            why << "the reference engine: every photon and event, "
+            why << "the reference engine: every photon, each chain until its grain is decided, "
                 << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
         } else {
             if (exposure == ExposureMethod::centre)

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "development.h"
 #include "rng.h"
 #include "test_render.h"  // mean_and_standard_error
 
@@ -193,6 +195,43 @@ TEST(Kinetics, SpacingsSamplerStopsWhereDecided)
         EXPECT_EQ(full.n4 >= 3, cut.n4 >= 3);
         EXPECT_LE(cut.n4, 3u);
     }
+}
+
+TEST(Kinetics, StoppedChainDecidesAsTheFullChain)
+{
+    // The exact engine's grains (render.cpp): the develop uniform u first,
+    // then the chain of the same stream stopped once n4 reaches
+    // n4_needed(u). Whether the grain develops must be the full chain's
+    // develops(n4, u) for every grain, and the stopped chain must take no
+    // more events (and fewer in many grains, else nothing was tested).
+    Stock stock;
+    const Development dev(stock);
+    const KineticsRates regimes[] = { { 1e7, 1e6, 10 }, { 1e5, 1e7, 1e4 }, { 1e8, 1e3, 1e6 } };
+    uint64_t grains = 0, shortened = 0, developed = 0;
+    for (const KineticsRates& rates : regimes)
+        for (uint64_t n : { 4u, 20u, 300u, 5000u })
+            for (uint64_t r = 0; r < 300; ++r) {
+                Rng develop(hash_ids(0x570, n, r), Stage::development);
+                const double u        = develop.uniform();
+                const uint64_t needed = dev.n4_needed(u);
+                Rng a(hash_ids(0x571, n, r), Stage::kinetics), b(hash_ids(0x571, n, r), Stage::kinetics);
+                uint64_t full_events = 0, cut_events = 0;
+                const LatentImage full = simulate_latent_image(n, kShutter_s, rates, a, &full_events);
+                bool cut_develops = needed == 0;
+                if (needed != 0 && needed != std::numeric_limits<uint64_t>::max())
+                    cut_develops = simulate_latent_image(n, kShutter_s, rates, b, &cut_events, needed)
+                                       .n4
+                                   >= needed;
+                ASSERT_EQ(cut_develops, dev.develops(full.n4, u))
+                    << "n " << n << " run " << r << " needed " << needed << " full n4 " << full.n4;
+                EXPECT_LE(cut_events, full_events);
+                ++grains;
+                shortened += cut_events < full_events;
+                developed += cut_develops;
+            }
+    EXPECT_GT(shortened, grains / 4);
+    EXPECT_GT(developed, grains / 4);
+    EXPECT_LT(developed, grains);
 }
 
 TEST(Kinetics, RateScaleFollowsArea)

@@ -534,18 +534,27 @@ private:
         if (layer.inhibition)
             u = inhibited_uniform(u, layer.inhibition->at(g.x_um, g.y_um));
         if (pop.kinetics == KineticsMethod::chain) {
-            // The reference: every photon and event, then development.
+            // The reference: every grain's absorbed photons, then its chain
+            // until the grain's fate is decided. u is drawn first and n4
+            // never decreases, so the chain stopped when n4 reaches
+            // n4_needed(u) (and not run when that is 0, or when no n4
+            // decides) develops the grain exactly when the full chain of
+            // the same stream would (kinetics test
+            // StoppedChainDecidesAsTheFullChain).
             Rng photon_rng(g.id, Stage::photons);
-            o.photons = sample_poisson(photon_mean(layer, pop, g), photon_rng);
-            LatentImage latent;
+            o.photons             = sample_poisson(photon_mean(layer, pop, g), photon_rng);
+            const uint64_t needed = m_development.n4_needed(u);
+            o.developed           = needed == 0;
             // Fewer than four electrons cannot build a 4-centre: n4 = 0
             // exactly, so the chain need not run.
-            if (o.photons >= 4) {
+            if (o.photons >= 4 && needed != 0
+                && needed != std::numeric_limits<uint64_t>::max()) {
                 Rng kinetics_rng(g.id, Stage::kinetics);
-                latent = simulate_latent_image(o.photons, m_scene.shutter_s, scaled_rates(pop, g),
-                                               kinetics_rng, &o.events);
+                const LatentImage latent
+                    = simulate_latent_image(o.photons, m_scene.shutter_s, scaled_rates(pop, g),
+                                            kinetics_rng, &o.events, needed);
+                o.developed = latent.n4 >= needed;
             }
-            o.developed = m_development.develops(latent.n4, u);
             return o;
         }
         // Both faster paths first ask whether u alone decides: every grain

@@ -449,16 +449,18 @@ const Modifier kModifiers[] = {
       "rendered too, at negative coordinates and beyond the scan)",
       default_roi, parse_roi },
     { "engine", "auto|exact|fast",
-      "simulation engine: exact is the reference (every photon and event, exact coverage); "
+      "simulation engine: exact is the reference (every photon, the latent-image chain until each "
+      "grain is decided, exact coverage); "
       "auto runs the paths the scene needs within the tolerance; fast the fastest paths",
       [](const FilmgrainCommand& d) { return std::string(engine_name(d.engine_options.engine)); },
       parse_engine_value },
     { "tolerance", "D", "density error budget of the approximate paths (auto), (0, 1]",
       [](const FilmgrainCommand& d) { return format_number(d.engine_options.tolerance); }, parse_tolerance },
     { "kinetics", "chain|early|table|curve",
-      "expert override (not with engine=exact): chain = every event; early = the chain until "
-      "the grain's fate is decided (exact); table = P(develop|N) tabulated per scene; curve = "
-      "the fast per-grain kernel: P(develop|mean photons) from that table, one uniform per grain",
+      "expert override (not with engine=exact): chain = exact's: every photon, the chain until "
+      "the grain's fate is decided; early = the same, but no photons for a grain fog decides; "
+      "table = P(develop|N) tabulated per scene; curve = the fast per-grain kernel: "
+      "P(develop|mean photons) from that table, one uniform per grain",
       [](const FilmgrainCommand&) {
           return engine_choice("curve where a table pays for itself (large frames), else early; "
                                "fast: curve");

@@ -60,8 +60,10 @@ uint64_t grain_seed(const SceneSettings& scene);
 
 /// Which engine simulates the grains.
 enum class Engine {
-    exact,      ///< the reference: every photon and latent-image event,
-                ///< exact pixel coverage; no knob may change it
+    exact,      ///< the reference: every grain's photons, its latent-image
+                ///< events until its fate is decided (the full chain's
+                ///< decision, bit for bit), exact pixel coverage; no knob
+                ///< may change it
     fast,       ///< the fastest paths, whatever their error (reported)
     automatic,  ///< ("auto") per layer, the paths the scene needs within
                 ///< the error budget `tolerance`; the default
@@ -69,10 +71,12 @@ enum class Engine {
 
 /// How a grain's latent image decides its development (MODEL.md 3-4).
 enum class KineticsMethod {
-    chain,       ///< the full chain, every event (the reference)
-    early_stop,  ///< the chain until the outcome is decided: the develop
-                 ///< uniform is drawn first and n4 never decreases, so the
-                 ///< decision is exactly the full chain's (no error)
+    chain,       ///< the reference: every grain's absorbed photons, its
+                 ///< chain until its fate is decided (the develop uniform
+                 ///< is drawn first and n4 never decreases, so the decision
+                 ///< is exactly the full chain's, bit for bit)
+    early_stop,  ///< as chain, but a grain that its develop uniform alone
+                 ///< decides (fog) draws no photons (the same decisions)
     table,       ///< P(develop | N) tabulated once per scene by running the
                  ///< chain; grains sample it (Monte Carlo error, reported)
     curve,       ///< P(develop | mean photons): the table with the Poisson
