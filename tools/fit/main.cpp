@@ -430,12 +430,29 @@ int main(int argc, char** argv)
                                                      "plus the analytic bound)\n"
                         : "every row agrees within 3 standard errors plus the analytic bound\n");
         std::cout << "\nrender check:\n" << md.str();
+        // Which layers were rendered alone (render_check): say so.
+        std::string alone, together;
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            (filmgrain::fit::layer_develops_alone(stock, l) ? alone : together)
+                += (std::string(1, ' ') + stock.layers[l].name);
+        std::string layers;
+        if (stock.layers.size() > 1) {
+            layers = " Each layer's patches render";
+            if (!alone.empty())
+                layers += " the layer alone where no other layer inhibits it (every effect "
+                          "but MODEL.md 10's inhibition acts within a layer):" + alone;
+            if (!together.empty())
+                layers += std::string(alone.empty() ? "" : ";") + " the whole stock where "
+                          "another layer inhibits it:" + together;
+            layers += ".";
+        }
         if (!report_dir.empty())
             std::ofstream(report_dir + "/render_check.md")
                 << "# Render check: " << stock.name << "\n\nThe analytic figures beside "
                    "patches rendered with the exact engine and read by tools/sensitometry "
-                   "(expose_patch, read_granularity), seed " << opt.seed << ". Agreement: "
-                   "|rendered - analytic| <= 3 standard errors + the analytic bound.\n\n"
+                   "(expose_patch, read_granularity), seed " << opt.seed << "." << layers
+                << " Agreement: |rendered - analytic| <= 3 standard errors + the analytic "
+                   "bound.\n\n"
                 << md.str();
         if (disagree)
             return 1;
