@@ -548,13 +548,8 @@ private:
             // Fewer than four electrons cannot build a 4-centre: n4 = 0
             // exactly, so the chain need not run.
             if (o.photons >= 4 && needed != 0
-                && needed != std::numeric_limits<uint64_t>::max()) {
-                Rng kinetics_rng(g.id, Stage::kinetics);
-                const LatentImage latent
-                    = simulate_latent_image(o.photons, m_scene.shutter_s, scaled_rates(pop, g),
-                                            kinetics_rng, &o.events, needed);
-                o.developed = latent.n4 >= needed;
-            }
+                && needed != std::numeric_limits<uint64_t>::max())
+                run_chain_until_decided(pop, g, needed, o);
             return o;
         }
         // Both faster paths first ask whether u alone decides: every grain
@@ -583,13 +578,21 @@ private:
             o.developed = u >= 1.0 - pop.table->probability(o.photons);
             return o;
         }
-        // early_stop (or a grain brighter than the table): the chain runs
-        // until n4 reaches the count that decides this grain, if ever.
+        // early_stop (or a grain brighter than the table).
+        run_chain_until_decided(pop, g, needed, o);
+        return o;
+    }
+
+    /// The chain of a grain with o.photons absorbed photons, from its own
+    /// stream, until n4 reaches `needed` (the count that decides it), if
+    /// ever: o.developed and o.events.
+    void run_chain_until_decided(const PopulationPlan& pop, const Grain& g, uint64_t needed,
+                                 GrainOutcome& o) const
+    {
         Rng kinetics_rng(g.id, Stage::kinetics);
         const LatentImage latent = simulate_latent_image(
             o.photons, m_scene.shutter_s, scaled_rates(pop, g), kinetics_rng, &o.events, needed);
         o.developed = latent.n4 >= needed;
-        return o;
     }
 
     /// MODEL.md 5 at pixel scale (pixel_model.h): each pixel's exposure
