@@ -159,8 +159,9 @@ double table_density_error(const Population& pop, const DevelopTable& table,
 }
 
 /// How auto shares its density error budget (tolerance): the tables (and
-/// the curves folded from them) get three quarters, raster coverage the
-/// rest.
+/// the curves folded from them) are built for three quarters; raster
+/// coverage gets what the layer's tables and curves leave of the tolerance
+/// by their error bounds, and at least the last quarter.
 constexpr double kTableShare  = 0.75;
 constexpr double kRasterShare = 0.25;
 
@@ -180,14 +181,14 @@ constexpr double kMinDevelopedPerPixel = 3.9;
 /// densities (the log is convex), most where few points are uncovered.
 /// Measured on the colour wedge (6.25 um pixels, docs/performance): the
 /// largest step bias falls as (rows per radius)^-2.3 and is 0.0009 at 16
-/// rows per radius (raster_bias()); rows are chosen to keep it below the
-/// raster's share of the tolerance: rows per radius =
-/// (0.52 / (kRasterShare tolerance))^(1 / 2.3), 21 at 0.002. The fast
-/// engine takes 4 rows per radius, whatever the bias (~0.02-0.05).
-int raster_samples(double pitch_um, double smallest_radius_um, double tolerance, bool fast)
+/// rows per radius (raster_bias()); rows are chosen to keep it below
+/// `budget`, the density error the raster may add: rows per radius =
+/// (0.52 / budget)^(1 / 2.3), 21 at 0.0005 (a quarter of the default
+/// tolerance), 13.4 at 0.0013. The fast engine takes 4 rows per radius,
+/// whatever the bias (~0.02-0.05).
+int raster_samples(double pitch_um, double smallest_radius_um, double budget, bool fast)
 {
-    const double rows_per_radius
-        = fast ? 4.0 : std::pow(0.52 / (kRasterShare * tolerance), 1.0 / 2.3);
+    const double rows_per_radius = fast ? 4.0 : std::pow(0.52 / budget, 1.0 / 2.3);
     const double want = std::ceil(rows_per_radius * pitch_um / smallest_radius_um);
     return static_cast<int>(std::clamp(want, 1.0, 256.0));
 }
@@ -577,6 +578,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     }
     std::vector<bool> charged(requests.size(), false);
     std::vector<std::shared_ptr<const DevelopCurve>> curves(requests.size());
+    // Per layer, the tables' and curves' density error bounds over the
+    // exposures a table covers (up to where a mean-sized grain's mean
+    // photon count is the table's largest count, and 16 stops below): what
+    // the raster's budget is sized from. The error estimate is over the
+    // region's exposures (for --stats); this bound depends on neither the
+    // region nor its pixels, so the raster's rows are the same for every
+    // ROI.
+    std::vector<double> kinetics_bound(out.size(), 0.0);
     for (const Need& need : needs) {
         LayerPlan& plan        = out[need.layer];
         PopulationPlan& pp     = plan.populations[need.population];
@@ -600,6 +609,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         pp.table = rq.table;
         const Population& pop = stock.layers[need.layer].populations[need.population];
         plan.error_estimate += table_density_error(pop, *pp.table, need.photons_per_um2_max);
+        kinetics_bound[need.layer] += table_density_error(
+            pop, *pp.table,
+            static_cast<double>(pp.table->max_photons()) / pp.grains.mean_area_um2());
         // The fast per-grain kernel (P(develop | mean photons), one uniform
         // per grain) wherever a table is built, unless the table itself
         // was asked for.
@@ -613,8 +625,10 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             if (!settings.exposure_method)
                 pp.exposure = ExposureMethod::centre;
             // A curve error e moves a patch density by at most 0.434 n E[a] e.
-            plan.error_estimate += kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
-                                   * pp.curve->max_interpolation_error();
+            const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
+                                       * pp.curve->max_interpolation_error();
+            plan.error_estimate += curve_bound;
+            kinetics_bound[need.layer] += curve_bound;
         }
         std::ostringstream why;
         why << "population " << need.population << ": P(develop|N) tabulated for N <= "
@@ -676,8 +690,12 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         double smallest_radius_um = 1e300;
         for (const Population& pop : stock.layers[l].populations)
             smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
+        // The tolerance the layer's tables and curves leave, and at least
+        // the raster's share.
+        const double budget = std::max(kRasterShare * settings.tolerance,
+                                       settings.tolerance - kinetics_bound[l]);
         const int samples = raster_samples(std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
-                                           smallest_radius_um, settings.tolerance, fast);
+                                           smallest_radius_um, budget, fast);
         if (!settings.coverage && (all_curves(plan) || fast))
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
