@@ -18,6 +18,9 @@
 //   BM_ExposureDisc/R      LayerExposure::integrate_over_disc, disc diameter
 //                          = R/4 input pixels; items = grains
 //   BM_ExposureCentre      value_at (photons=centre), for comparison
+//   BM_ExposurePlaneDisc/R the fast kernel's ExposurePlane::integrals_over_discs
+//                          64 at a time (R = 1, 2, 4 as above), R = 0: its
+//                          centre lookup; items = discs
 //   BM_GridCoverage/C      grid_coverage (exact) of a 64x64 block of 6.25 um
 //                          pixels, discs of the paper stock (6 um, sigma
 //                          0.5) at covered fraction C/100; items = discs
@@ -244,6 +247,45 @@ void BM_ExposureCentre(benchmark::State& state)
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_ExposureCentre);
+
+/// The fast kernel's exposure from its float plane (ExposurePlane) of the
+/// same fixture, a cell's worth (64 discs) per call as the kernel calls it:
+/// integrals_over_discs (disc diameter R/4 input pixels, R <= 4) and, for
+/// comparison (R = 0), the centre lookup; items = discs.
+void BM_ExposurePlaneDisc(benchmark::State& state)
+{
+    static ExposureFixture fx;
+    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, 1.0);
+    FrameGeometry frame;
+    if (!FrameGeometry::make(256.0 / 1000.0, 256, 256, 256, 256, frame)) {
+        state.SkipWithError("frame");
+        return;
+    }
+    ExposurePlane plane;
+    plane.fill(ex, frame, { 0.0, 0.0, 256.0, 256.0 });
+    const auto centres = random_centres();
+    std::vector<double> x, y, r, out(64);
+    for (const auto& c : centres) {
+        x.push_back(c.first);
+        y.push_back(c.second);
+        r.push_back(0.5 * static_cast<double>(state.range(0)) / 4.0);
+    }
+    size_t i   = 0;
+    double sum = 0.0;
+    for (auto _ : state) {
+        const size_t o = (i++ * 64) & 4095;
+        if (state.range(0) == 0)
+            for (size_t j = 0; j < 64; ++j)
+                out[j] = plane.at(x[o + j], y[o + j]) * M_PI * 0.25;
+        else
+            plane.integrals_over_discs(&x[o], &y[o], &r[o], 64, out.data());
+        sum += out[0] + out[63];
+    }
+    benchmark::DoNotOptimize(sum);
+    state.SetItemsProcessed(state.iterations() * 64);
+}
+// 0: the centre lookup; disc diameter / input pixel = 0.25, 0.5, 1.
+BENCHMARK(BM_ExposurePlaneDisc)->Arg(0)->Arg(1)->Arg(2)->Arg(4);
 
 /// Developed discs touching a 64 x 64 block of 6.25 um pixels: a Boolean
 /// model of paper-stock discs (mean 6 um, log sigma 0.5) whose expected

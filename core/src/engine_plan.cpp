@@ -1,6 +1,8 @@
 // Choosing the paths of a render, once per layer.
 #include "engine_plan.h"
 
+#include "grain_kernel.h"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -622,8 +624,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pp.kinetics = KineticsMethod::curve;
             pp.curve    = curves[need.request];
             pp.fast     = std::make_shared<const FastGrains>(pp.grains);
-            if (!settings.exposure_method)
-                pp.exposure = ExposureMethod::centre;
             // A curve error e moves a patch density by at most 0.434 n E[a] e.
             const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
                                        * pp.curve->max_interpolation_error();
@@ -861,6 +861,12 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             if (exposure == ExposureMethod::centre)
                 why << "exposure sampled at grain centres (error at image edges, measured in "
                        "docs/); ";
+            else if (std::any_of(plan.populations.begin(), plan.populations.end(),
+                                 [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
+                why << "exposure integrated over each grain's disc (the kernel's: segment "
+                       "areas tabulated to "
+                    << format_g(SegmentTable::shared().max_error())
+                    << " of r^2, float exposure values); ";
             if (plan.coverage == CoverageMethod::scanline)
                 why << "coverage on " << plan.coverage_samples
                     << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "

@@ -217,6 +217,7 @@ struct TileScratch {
     std::vector<double> lambda, u;
     std::vector<uint8_t> decided;
     std::vector<uint32_t> touching;  ///< indices into the batch
+    std::vector<double> disc_integrals;  ///< the batch's, from the plane
 };
 
 /// What happened to one grain.
@@ -261,20 +262,53 @@ public:
             bool plane_filled = false;
             for (const PopulationPlan& pop : layer.populations) {
                 if (pop.fast) {
-                    if (pop.exposure == ExposureMethod::centre && !plane_filled) {
-                        const double m = layer.margin_um;
+                    if (!plane_filled) {
+                        // Grain centres lie within margin_um of the tile,
+                        // their discs within twice that.
+                        const double m = 2.0 * layer.margin_um;
                         scratch.plane.fill(layer.exposure, m_frame,
                                            { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
                                              rect.y1_um + m });
                         plane_filled = true;
                     }
                     FastCounts c;
-                    const auto centre = [&](double x, double y, double r) {
-                        return scratch.plane.at(x, y) * r * r * M_PI;
+                    // The exposure integral of a batch's grain i (value x
+                    // um^2), after prepare(batch) for its cell.
+                    struct Centre {
+                        const ExposurePlane& plane;
+                        void prepare(const FastGrains::Batch&) const {}
+                        double operator()(const FastGrains::Batch& b, size_t i) const
+                        {
+                            return plane.at(b.x[i], b.y[i]) * b.r[i] * b.r[i] * M_PI;
+                        }
                     };
-                    const auto disc = [&](double x, double y, double r) {
-                        return layer.exposure.integrate_over_disc(x, y, r);
+                    // Over the disc: from the plane, a cell at a time, for
+                    // discs that cross at most one pixel edge each way
+                    // (every grain but the largest of stocks whose grains
+                    // come near the input pixel's size), else from the
+                    // input image.
+                    struct Disc {
+                        const ExposurePlane& plane;
+                        const LayerExposure& exposure;
+                        std::vector<double>& values;
+                        double half_pitch;
+                        void prepare(const FastGrains::Batch& b) const
+                        {
+                            if (values.size() < b.n)
+                                values.resize(b.n);
+                            plane.integrals_over_discs(b.x.data(), b.y.data(), b.r.data(), b.n,
+                                                       values.data());
+                        }
+                        double operator()(const FastGrains::Batch& b, size_t i) const
+                        {
+                            return b.r[i] <= half_pitch
+                                       ? values[i]
+                                       : exposure.integrate_over_disc(b.x[i], b.y[i], b.r[i]);
+                        }
                     };
+                    const Centre centre { scratch.plane };
+                    const Disc disc { scratch.plane, layer.exposure, scratch.disc_integrals,
+                                      scratch.plane.half_pitch_um() };
                     // Silver without inhibition (the common case) runs the
                     // kernel without the per-grain checks of MODEL.md 8, 10.
                     const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
@@ -410,7 +444,7 @@ private:
 
     /// MODEL.md 1-4 for the grains of a population near a tile, by the fast
     /// per-grain kernel (grain_kernel.h): one uniform per grain against
-    /// P(develop | mean photons). `integral(x, y, r)` is the exposure value
+    /// P(develop | mean photons). `integral(batch, i)` is the exposure value
     /// integrated over the disc (value x um^2), chosen once per population.
     /// Developed grains whose image touches the tile are appended to
     /// `discs`, in the grains' order.
@@ -470,12 +504,14 @@ private:
                             u = inhibited_uniform(u, inhibition->at(b.x[i], b.y[i]));
                     return u;
                 };
+                if (m > 0)
+                    integral.prepare(b);
                 // Every touching grain's mean photons and its decision from
                 // the curve (j: its place among them).
                 const auto first_loop = [&](auto with_curve) {
                     for (size_t j = 0; j < m; ++j) {
                         const size_t i = touching[j];
-                        const double l = k * integral(b.x[i], b.y[i], b.r[i]);
+                        const double l = k * integral(b, i);
                         const double u = uniform_of(i);
                         lambda[j]      = l;
                         if constexpr (!Plain)
@@ -742,7 +778,8 @@ double max_radius_um(const Stock& stock, const SceneSettings& scene)
 }
 
 /// The input pixels a render of `roi` reads: the ROI's film rectangle
-/// grown by the largest grain's radius, or the whole frame when a layer
+/// grown by the largest grain's diameter (a grain that touches the ROI
+/// integrates its exposure over its disc), or the whole frame when a layer
 /// spreads light or inhibition acts (MODEL.md 9, 10: the spread exposure
 /// and the blurred densities are computed over the whole frame, so that a
 /// ROI reads exactly the values a full render does).
@@ -754,7 +791,7 @@ InputRegion read_region(const Stock& stock, const SceneSettings& scene, const Im
         whole_frame = whole_frame || layer.spreads_light();
     if (whole_frame)
         return InputRegion { 0, 0, input.frame_width(), input.frame_height() };
-    return input_region(input, frame, roi, max_radius_um(stock, scene));
+    return input_region(input, frame, roi, 2.0 * max_radius_um(stock, scene));
 }
 
 Status validate_request(const Stock& stock, const SceneSettings& scene, const ImageView& input,

@@ -468,7 +468,7 @@ const Modifier kModifiers[] = {
       parse_kinetics_value },
     { "photons", "disc|centre",
       "expert override: exposure integrated over each grain's disc, or sampled at its centre",
-      [](const FilmgrainCommand&) { return engine_choice("disc, centre with kinetics=curve; fast: centre"); },
+      [](const FilmgrainCommand&) { return engine_choice("disc; fast: centre"); },
       parse_photons_value },
     { "coverage", "exact|scanline|raster",
       "expert override: exact pixel coverage, chord unions on sub-scanlines, or a raster of 64 "

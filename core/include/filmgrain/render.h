@@ -81,8 +81,9 @@ enum class KineticsMethod {
                  ///< chain; grains sample it (Monte Carlo error, reported)
     curve,       ///< P(develop | mean photons): the table with the Poisson
                  ///< count folded in; one uniform per grain, in the fast
-                 ///< per-grain kernel (centre exposure; the table's error
-                 ///< plus the curve's, reported)
+                 ///< per-grain kernel (disc exposure for auto, centre
+                 ///< for fast; the table's error plus the curve's,
+                 ///< reported)
 };
 
 /// How a grain's absorbed photon count gets its mean (MODEL.md 2).
