@@ -168,31 +168,34 @@ public:
     /// Fills the plane for the input pixels that `rect` touches.
     void fill(const LayerExposure& exposure, const FrameGeometry& frame, const RectUm& rect);
 
-    /// Half the input pixel pitch: the largest radius integral_over_disc
-    /// takes.
-    double half_pitch_um() const { return 0.5 * m_pitch; }
+    /// The input pixel pitch: the largest radius integral_over_disc takes;
+    /// integrals_over_discs takes half of it.
+    double pitch_um() const { return m_pitch; }
 
     /// The integral of v over the disc (value x um^2) against the
     /// box-reconstructed image, as LayerExposure::integrate_over_disc, for
-    /// a disc of radius r <= half_pitch_um() that lies inside the filled
-    /// window (pixels beyond it read 0, as outside the image). Such a disc
-    /// crosses at most one vertical and one horizontal pixel edge, the
-    /// nearer ones: with a = the distance to the vertical edge and b to the
-    /// horizontal one, in radii, the disc's area beyond the vertical edge
-    /// is r^2 S(a), beyond the horizontal one r^2 S(b) (S: SegmentTable),
-    /// and beyond both (the corner's quadrant, when the corner is inside
-    /// the disc, a^2 + b^2 < 1) r^2 (S(a) / 2 + S(b) / 2 - pi / 4 + a b);
-    /// the four pixels around the corner get their shares of pi r^2. Exact
-    /// up to the segment table's error (max_error() r^2 per edge) and the
-    /// plane's float values.
+    /// a disc of radius r <= pitch_um() that lies inside the filled window
+    /// (pixels beyond it read 0, as outside the image). Such a disc never
+    /// crosses two pixel edges on one side of its centre. A disc with r <=
+    /// pitch / 2 crosses at most the nearer vertical and horizontal edge:
+    /// with a = the distance to the vertical edge and b to the horizontal
+    /// one, in radii, its area beyond the vertical edge is r^2 S(a), beyond
+    /// the horizontal one r^2 S(b) (S: SegmentTable), and beyond both (the
+    /// corner's quadrant, when the corner is inside the disc, a^2 + b^2 <
+    /// 1) r^2 (S(a) / 2 + S(b) / 2 - pi / 4 + a b): the four pixels around
+    /// the corner get their shares of pi r^2. A wider disc: the same with
+    /// the edges on both sides and the four corners, over the nine pixels
+    /// around. Exact up to the segment table's error (max_error() r^2 per
+    /// edge) and the plane's float values.
     double integral_over_disc(double x_um, double y_um, double r_um) const;
 
-    /// integral_over_disc of n discs (x[i], y[i], r[i]) into out[i], in one
-    /// loop that the AVX2 build runs four discs at a time (the same values
-    /// in every build: the same IEEE operations, no FMA). A disc with r >
-    /// half_pitch_um(), or beyond the window, gets a wrong value, never a
-    /// read outside the plane's memory. `portable`: the baseline build even
-    /// where the processor has AVX2 (for the test that both agree).
+    /// integral_over_disc of n discs (x[i], y[i], r[i]) with r <= pitch / 2
+    /// into out[i], in one loop that the AVX2 build runs four discs at a
+    /// time (the same values in every build: the same IEEE operations, no
+    /// FMA). A wider disc, or one beyond the window, gets a wrong value,
+    /// never a read outside the plane's memory. `portable`: the baseline
+    /// build even where the processor has AVX2 (for the test that both
+    /// agree).
     void integrals_over_discs(const double* x_um, const double* y_um, const double* r_um,
                               size_t n, double* out, bool portable = false) const;
 

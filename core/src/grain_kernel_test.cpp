@@ -122,9 +122,10 @@ TEST(ExposurePlane, DiscIntegralIsTheBoxImagesIntegral)
 {
     // A 9x7 image of random values (some zero) at a 10 um pitch; the
     // plane's disc integral against LayerExposure's (exact, from the
-    // quadrant function) for discs up to half a pixel in radius anywhere
-    // over and beside the image: at pixel edges, corners, inside pixels,
-    // half outside. Tolerance: the segment table's error times r^2 for
+    // quadrant function) for discs up to a pixel in radius (both of its
+    // formulas: up to half a pixel, and up to a pixel) anywhere over and
+    // beside the image: at pixel edges, corners, inside pixels, half
+    // outside. Tolerance: the segment table's error times r^2 for
     // each of the two edges, weighted by the largest value, plus the
     // plane's float rounding (relative 2^-24 of the integral's scale).
     constexpr int64_t W = 9, H = 7;
@@ -140,17 +141,17 @@ TEST(ExposurePlane, DiscIntegralIsTheBoxImagesIntegral)
     ASSERT_TRUE(FrameGeometry::make(W * kPitch / 1000.0, W, H, W, H, frame));
     ExposurePlane plane;
     plane.fill(exposure, frame, { -20.0, -20.0, W * kPitch + 20.0, H * kPitch + 20.0 });
-    ASSERT_DOUBLE_EQ(plane.half_pitch_um(), 0.5 * kPitch);
+    ASSERT_DOUBLE_EQ(plane.pitch_um(), kPitch);
     const double seg_error = SegmentTable::shared().max_error();
     EXPECT_GT(seg_error, 0.0);
     EXPECT_LT(seg_error, 1e-5);
-    int straddling = 0, corners = 0;
+    int straddling = 0, corners = 0, both_sides = 0;
     for (int i = 0; i < 20000; ++i) {
         const double x = -8.0 + (W * kPitch + 16.0) * unit(gen);
         const double y = -8.0 + (H * kPitch + 16.0) * unit(gen);
         // Radii down to tiny, up to exactly half the pitch; every tenth
         // disc centred on a corner or an edge exactly.
-        double r = i % 7 == 0 ? 0.5 * kPitch : 0.5 * kPitch * unit(gen);
+        double r = i % 7 == 0 ? 0.5 * kPitch : i % 11 == 0 ? kPitch : kPitch * unit(gen);
         double cx = x, cy = y;
         if (i % 10 == 0)
             cx = kPitch * std::round(x / kPitch);
@@ -159,17 +160,19 @@ TEST(ExposurePlane, DiscIntegralIsTheBoxImagesIntegral)
         r = std::max(r, 1e-3);
         const double want = exposure.integrate_over_disc(cx, cy, r);
         const double got  = plane.integral_over_disc(cx, cy, r);
-        const double tol  = 2.0 * seg_error * r * r * 4.0 + 4.0 * M_PI * r * r * 0x1.0p-22;
+        const double tol  = 4.0 * seg_error * r * r * 4.0 + 4.0 * M_PI * r * r * 0x1.0p-22;
         ASSERT_NEAR(got, want, tol) << "disc (" << cx << ", " << cy << ") r " << r;
         const double fx = cx / kPitch - std::floor(cx / kPitch);
         const double fy = cy / kPitch - std::floor(cy / kPitch);
         const double ex = std::min(fx, 1.0 - fx) * kPitch, ey = std::min(fy, 1.0 - fy) * kPitch;
         straddling += ex < r || ey < r;
         corners += ex * ex + ey * ey < r * r;
+        both_sides += fx * kPitch < r && (1.0 - fx) * kPitch < r;
     }
     // The cases the formula distinguishes all occurred.
     EXPECT_GT(straddling, 5000);
     EXPECT_GT(corners, 1000);
+    EXPECT_GT(both_sides, 500);
 }
 
 TEST(ExposurePlane, EveryBuildGivesTheSameDiscIntegrals)

@@ -283,15 +283,15 @@ public:
                         }
                     };
                     // Over the disc: from the plane, a cell at a time, for
-                    // discs that cross at most one pixel edge each way
-                    // (every grain but the largest of stocks whose grains
-                    // come near the input pixel's size), else from the
-                    // input image.
+                    // discs up to half an input pixel in radius (they cross
+                    // at most one pixel edge each way), one at a time up to
+                    // a pixel, else (grains larger than the input pixels)
+                    // from the input image.
                     struct Disc {
                         const ExposurePlane& plane;
                         const LayerExposure& exposure;
                         std::vector<double>& values;
-                        double half_pitch;
+                        double pitch;
                         void prepare(const FastGrains::Batch& b) const
                         {
                             if (values.size() < b.n)
@@ -301,14 +301,16 @@ public:
                         }
                         double operator()(const FastGrains::Batch& b, size_t i) const
                         {
-                            return b.r[i] <= half_pitch
-                                       ? values[i]
-                                       : exposure.integrate_over_disc(b.x[i], b.y[i], b.r[i]);
+                            const double r = b.r[i];
+                            if (r <= 0.5 * pitch)
+                                return values[i];
+                            return r <= pitch ? plane.integral_over_disc(b.x[i], b.y[i], r)
+                                              : exposure.integrate_over_disc(b.x[i], b.y[i], r);
                         }
                     };
                     const Centre centre { scratch.plane };
                     const Disc disc { scratch.plane, layer.exposure, scratch.disc_integrals,
-                                      scratch.plane.half_pitch_um() };
+                                      scratch.plane.pitch_um() };
                     // Silver without inhibition (the common case) runs the
                     // kernel without the per-grain checks of MODEL.md 8, 10.
                     const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
