@@ -43,6 +43,7 @@ FastGrains::FastGrains(const PopulationGrains& grains, int quantiles)
         area_exact += bin.grains_per_um2 * a_exact / nq;
         total += bin.grains_per_um2;
         m_radius.push_back(std::move(table));
+        m_counts.emplace_back(bin.grains_per_um2 * bin.cell_um * bin.cell_um);
     }
     m_mean_area_error = total > 0.0 && area_exact > 0.0 ? std::fabs(area_table - area_exact) / area_exact : 0.0;
 }

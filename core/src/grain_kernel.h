@@ -2,7 +2,8 @@
 // grains of a tile in one plain loop per cell, chosen once per population
 // (OCIO's "renderer chosen once"):
 //   - generation: the population's Poisson process, cell by cell as
-//     PopulationGrains splits it (same bins, cells and intensities), but
+//     PopulationGrains splits it (same bins, cells and intensities), but a
+//     cell's count comes from its bin's tabulated Poisson CDF, and
 //     each grain's position, size and develop uniform come from two words
 //     of a counter-based stream of its cell (no per-grain seeding), and its
 //     radius from the bin's tabulated quantile function;
@@ -25,6 +26,7 @@
 #include "geometry.h"
 #include "image_formation.h"
 #include "rng.h"
+#include "sampling.h"
 
 namespace filmgrain {
 
@@ -74,6 +76,8 @@ private:
     /// Per bin: radius at u = k / quantiles, k = 0..quantiles, and a copy of
     /// the last (interpolation at u -> 1 needs no check).
     std::vector<std::vector<double>> m_radius;
+    /// Per bin: its cells' Poisson counts, tabulated.
+    std::vector<PoissonTable> m_counts;
     double m_max_radius_error = 0.0;
     double m_mean_area_error  = 0.0;
 };
@@ -87,8 +91,7 @@ void FastGrains::for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& v
         const PopulationGrains::Bin& bin = m_grains.bins()[b];
         const uint64_t cell              = m_grains.cell_id(b, cx, cy);
         Rng count_rng(cell, Stage::fast_cell);
-        const uint64_t n = sample_poisson(bin.grains_per_um2 * bin.cell_um * bin.cell_um,
-                                          count_rng);
+        const uint64_t n = m_counts[b].sample(count_rng.uniform());
         batch.cell = cell;
         batch.n    = static_cast<size_t>(n);
         if (batch.x.size() < batch.n) {

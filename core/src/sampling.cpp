@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace filmgrain {
 
@@ -173,6 +174,44 @@ uint64_t sample_poisson(double mean, Rng& rng)
     if (mean >= kPoissonSaturation)
         return std::numeric_limits<uint64_t>::max();
     return mean < 10.0 ? poisson_inversion(mean, rng) : poisson_ptrs(mean, rng);
+}
+
+PoissonTable::PoissonTable(double mean) : m_mean(mean)
+{
+    if (!(mean >= 0.0 && mean <= 1e4))
+        throw std::invalid_argument("PoissonTable: mean must be in [0, 1e4]");
+    // The pmf from the mode outwards (no underflow at e^-mean for large
+    // means), normalised by its sum, then summed from 0.
+    const uint64_t mode = static_cast<uint64_t>(mean);
+    const uint64_t top  = static_cast<uint64_t>(mean + 40.0 * std::sqrt(mean) + 60.0);
+    std::vector<double> pmf(static_cast<size_t>(top) + 1, 0.0);
+    pmf[static_cast<size_t>(mode)] = 1.0;
+    for (uint64_t k = mode; k > 0; --k)
+        pmf[static_cast<size_t>(k - 1)] = pmf[static_cast<size_t>(k)] * static_cast<double>(k) / mean;
+    for (uint64_t k = mode + 1; k <= top; ++k)
+        pmf[static_cast<size_t>(k)] = pmf[static_cast<size_t>(k - 1)] * mean / static_cast<double>(k);
+    if (mean == 0.0)
+        pmf.assign(1, 1.0);
+    double total = 0.0;
+    for (double p : pmf)
+        total += p;
+    double cdf = 0.0;
+    for (size_t k = 0; k < pmf.size(); ++k) {
+        cdf += pmf[k] / total;
+        m_cdf.push_back(cdf);
+        if (1.0 - cdf < 0x1.0p-60)
+            break;
+    }
+    m_cdf.back() = 1.0;  // the last count takes the tail
+    const size_t guides = std::max<size_t>(m_cdf.size(), 2);
+    m_guide.resize(guides);
+    size_t k = 0;
+    for (size_t j = 0; j < guides; ++j) {
+        const double u = static_cast<double>(j) / static_cast<double>(guides - 1);
+        while (k + 1 < m_cdf.size() && m_cdf[k] <= u)
+            ++k;
+        m_guide[j] = static_cast<uint32_t>(k);
+    }
 }
 
 }  // namespace filmgrain

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "rng.h"
 
@@ -53,6 +54,32 @@ double sample_truncated_normal(double z_lo, double z_hi, double u);
 /// 2^63 or more, +inf included, saturate at UINT64_MAX. Never decreasing in
 /// the mean's range for a fixed stream, never 0 for a huge mean.
 uint64_t sample_poisson(double mean, Rng& rng);
+
+/// Poisson(mean) counts by inversion of the tabulated CDF with one uniform,
+/// for a mean drawn many times (the fast kernel's cell counts): a guide
+/// table (Chen and Asau) starts the search at most a step or two short of
+/// the count. The CDF is summed from the pmf by recurrence up to where the
+/// upper tail is below 2^-60 (beneath a uniform's resolution, 2^-53), and
+/// that last count takes the tail. Means up to 1e4 (larger ones would need
+/// a long table; sample_poisson takes them). Thread safety: const.
+class PoissonTable {
+public:
+    explicit PoissonTable(double mean);
+    /// The count for uniform u in [0, 1).
+    uint64_t sample(double u) const
+    {
+        size_t k = m_guide[static_cast<size_t>(u * static_cast<double>(m_guide.size() - 1))];
+        while (u >= m_cdf[k])
+            ++k;
+        return k;
+    }
+    double mean() const { return m_mean; }
+
+private:
+    double m_mean;
+    std::vector<double> m_cdf;     ///< P(N <= k); the last is 1
+    std::vector<uint32_t> m_guide;  ///< the smallest k with cdf[k] > j / (size - 1)
+};
 
 /// The Poisson(lambda) pmf over [n0, n1] by recurrence from the mode (one
 /// lgamma in all), calling f(n, p) for each n whose p is above 1e-300.
