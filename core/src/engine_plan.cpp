@@ -624,6 +624,22 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pp.kinetics = KineticsMethod::curve;
             pp.curve    = curves[need.request];
             pp.fast     = std::make_shared<const FastGrains>(pp.grains);
+            // Exposure: integrated over the disc (from the tile's plane,
+            // grain_kernel.h) where nearly every grain is at most an input
+            // pixel in radius (the 99.87th percentile, z = 3); where grains
+            // are larger than input pixels (fine input pixels, e.g. a 16K
+            // input under the paper stock's 6 um grains) most would take
+            // the input image's integral over many pixels, 0.3-1.4 us
+            // each, and the kernel samples the centre as before (its error
+            // there is not measured; docs/performance). engine=fast
+            // samples the centre.
+            if (!settings.exposure_method && !fast) {
+                const double s   = pop.diameter_log_sigma;
+                const double r_q = 0.5 * std::exp(std::log(pop.diameter_um) - 0.5 * s * s
+                                                  + s * kTableAreaQuantileZ);
+                pp.exposure
+                    = r_q <= frame.input_pitch_um ? ExposureMethod::disc : ExposureMethod::centre;
+            }
             // A curve error e moves a patch density by at most 0.434 n E[a] e.
             const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
                                        * pp.curve->max_interpolation_error();
@@ -845,9 +861,17 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         for (size_t p = 0; p < plan.populations.size(); ++p)
             path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
         const ExposureMethod exposure = plan.populations.front().exposure;
+        const bool mixed = std::any_of(
+            plan.populations.begin(), plan.populations.end(),
+            [&](const PopulationPlan& pp) { return pp.exposure != exposure; });
         if (plan.populations.front().fast)
             path << " grains=fast";
-        path << " exposure=" << exposure_method_name(exposure);
+        path << " exposure=";
+        if (mixed)  // per population, as kinetics
+            for (size_t p = 0; p < plan.populations.size(); ++p)
+                path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
+        else
+            path << exposure_method_name(exposure);
         if (plan.dye_samples == 0)  // a dye layer's image is above, not a coverage
             path << " coverage=" << coverage_method_name(plan.coverage);
         if (plan.dye_samples == 0
@@ -858,11 +882,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             why << "the reference engine: every photon, each chain until its grain is decided, "
                 << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
         } else {
-            if (exposure == ExposureMethod::centre)
-                why << "exposure sampled at grain centres (error at image edges, measured in "
-                       "docs/); ";
-            else if (std::any_of(plan.populations.begin(), plan.populations.end(),
-                                 [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
+            if (exposure == ExposureMethod::centre || mixed)
+                why << "exposure sampled at grain centres"
+                    << (mixed ? " for the populations above marked so" : "")
+                    << (fast ? "" : " (the kernel's, where grains are larger than input pixels)")
+                    << " (error at image edges, measured in docs/); ";
+            if (exposure == ExposureMethod::disc
+                && std::any_of(plan.populations.begin(), plan.populations.end(),
+                               [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
                 why << "exposure integrated over each grain's disc (the kernel's: segment "
                        "areas tabulated to "
                     << format_g(SegmentTable::shared().max_error())
