@@ -83,19 +83,15 @@ void ExposurePlane::fill(const LayerExposure& exposure, const FrameGeometry& fra
     m_y0 = static_cast<double>(y0);
     m_w  = static_cast<double>(x1 - x0);
     m_h  = static_cast<double>(y1 - y0);
-    m_stride = static_cast<size_t>(x1 - x0);
-    m_v.resize(static_cast<size_t>((x1 - x0) * (y1 - y0)));
-    size_t i = 0;
-    for (int64_t y = y0; y < y1; ++y)
-        for (int64_t x = x0; x < x1; ++x)
-            m_v[i++] = static_cast<float>(exposure.value(x, y));
     m_nx            = x1 - x0;
     m_ny            = y1 - y0;
-    m_padded_stride = m_nx + 2 * kPad;
-    m_padded.assign(static_cast<size_t>(m_padded_stride * (m_ny + 2 * kPad)), 0.0f);
-    for (int64_t y = 0; y < m_ny; ++y)
-        std::copy_n(m_v.data() + y * m_nx, m_nx,
-                    m_padded.data() + (y + kPad) * m_padded_stride + kPad);
+    m_padded_stride = static_cast<size_t>(m_nx + 2 * kPad);
+    m_padded.assign(m_padded_stride * static_cast<size_t>(m_ny + 2 * kPad), 0.0f);
+    for (int64_t y = y0; y < y1; ++y) {
+        float* row = m_padded.data() + static_cast<size_t>(y - y0 + kPad) * m_padded_stride + kPad;
+        for (int64_t x = x0; x < x1; ++x)
+            row[x - x0] = static_cast<float>(exposure.value(x, y));
+    }
 }
 
 /// ExposurePlane::integrals_over_discs: a scalar loop, and an AVX2 one

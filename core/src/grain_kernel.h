@@ -212,7 +212,7 @@ public:
         if (!(gx >= 0.0 && gy >= 0.0 && gx < m_w && gy < m_h))
             return 0.0;
         const size_t fx = static_cast<size_t>(gx), fy = static_cast<size_t>(gy);
-        return m_v[fy * m_stride + fx];
+        return m_padded[(fy + kPad) * m_padded_stride + (fx + kPad)];
     }
 
 private:
@@ -220,15 +220,15 @@ private:
     static constexpr int64_t kPad = 2;
     friend struct PlaneIntegrals;
 
-    std::vector<float> m_v;
-    /// The window with kPad pixels of zeros on every side (integral_over_disc).
+    /// The window's values with kPad pixels of zeros on every side (the
+    /// disc integrals read the neighbours of a pixel without checks).
     std::vector<float> m_padded;
-    int64_t m_nx = 0, m_ny = 0, m_padded_stride = 0;
+    int64_t m_nx = 0, m_ny = 0;
+    size_t m_padded_stride = 0;
     const SegmentTable* m_segment = &SegmentTable::shared();
     double m_pitch = 0.0;
     double m_inv_pitch = 0.0;
     double m_x0 = 0.0, m_y0 = 0.0, m_w = 0.0, m_h = 0.0;
-    size_t m_stride = 0;
 };
 
 }  // namespace filmgrain

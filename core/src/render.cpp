@@ -265,7 +265,12 @@ public:
                     if (!plane_filled) {
                         // Grain centres lie within margin_um of the tile,
                         // their discs within twice that.
-                        const double m = 2.0 * layer.margin_um;
+                        const bool discs = std::any_of(
+                            layer.populations.begin(), layer.populations.end(),
+                            [](const PopulationPlan& pp) {
+                                return pp.fast && pp.exposure == ExposureMethod::disc;
+                            });
+                        const double m = (discs ? 2.0 : 1.0) * layer.margin_um;
                         scratch.plane.fill(layer.exposure, m_frame,
                                            { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
                                              rect.y1_um + m });
