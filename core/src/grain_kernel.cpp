@@ -131,39 +131,56 @@ struct PlaneIntegrals {
         return t > g ? t - 1.0 : t;
     }
 
-    double one(double x, double y, double r) const
+    /// Where a disc lies: its pixel (fx, fy; plane coordinates, clamped
+    /// into the padding: only a disc beyond the window is moved, and it
+    /// gets a wrong value, not a read outside the memory), the centre
+    /// within it (tx, ty in [0, 1)), and the pitch in radii.
+    struct Where {
+        double fx, fy, tx, ty, inv_r;
+    };
+    Where locate(double x, double y, double r) const
     {
         const double gx = min_of(max_of(x * inv_pitch - x0, -kBig), kBig);
         const double gy = min_of(max_of(y * inv_pitch - y0, -kBig), kBig);
-        // The pixel holding the centre, clamped into the padding (only a
-        // disc beyond the window is moved: it gets a wrong value, not a
-        // read outside the memory).
         const double fx = min_of(max_of(floor_of(gx), -1.0), nx);
         const double fy = min_of(max_of(floor_of(gy), -1.0), ny);
-        const double tx = gx - fx, ty = gy - fy;
-        // The nearer edges, in radii (cut to [0, 1]: a disc does not cross
-        // an edge a radius away), and the neighbours across them.
-        const double inv_r = pitch / r;
-        const double a = min_of(max_of(min_of(tx, 1.0 - tx) * inv_r, 0.0), 1.0);
-        const double b = min_of(max_of(min_of(ty, 1.0 - ty) * inv_r, 0.0), 1.0);
-        const double dx = tx < 0.5 ? -1.0 : 1.0, drow = ty < 0.5 ? -stride : stride;
-        // S(a), S(b) from the table.
-        const double sa = a * kK, sb = b * kK;
-        const int ka = static_cast<int>(sa), kb = static_cast<int>(sb);
-        const double fa = sa - static_cast<double>(ka), fb = sb - static_cast<double>(kb);
-        const double area_x = seg[ka] + fa * (seg[ka + 1] - seg[ka]);
-        const double area_y = seg[kb] + fb * (seg[kb + 1] - seg[kb]);
-        const double corner = (0.5 * (area_x + area_y) - kQuarterPi) + a * b;
-        const double area_xy = a * a + b * b < 1.0 ? corner : 0.0;
-        const double base = (fy + kPad) * stride + (fx + kPad);
-        const double v00 = v[static_cast<int>(base)];
-        const double vx  = v[static_cast<int>(base + dx)];
-        const double vy  = v[static_cast<int>(base + drow)];
-        const double vxy = v[static_cast<int>((base + drow) + dx)];
-        const double sum = ((v00 * (((M_PI - area_x) - area_y) + area_xy)
-                             + vx * (area_x - area_xy))
-                            + vy * (area_y - area_xy))
-                           + vxy * area_xy;
+        return { fx, fy, gx - fx, gy - fy, pitch / r };
+    }
+    /// Distance t in radii cut to [0, 1] (a disc does not cross an edge a
+    /// radius away).
+    static double cut(double t) { return min_of(max_of(t, 0.0), 1.0); }
+    /// S(t) from the table, t in [0, 1].
+    double segment(double t) const
+    {
+        const double st = t * kK;
+        const int k     = static_cast<int>(st);
+        return seg[k] + (st - static_cast<double>(k)) * (seg[k + 1] - seg[k]);
+    }
+    /// The quadrant beyond a corner at distances a, b (in radii) whose
+    /// segments are sa, sb: nothing unless the corner is inside the disc.
+    static double quadrant(double a, double sa, double b, double sb)
+    {
+        const double corner = (0.5 * (sa + sb) - kQuarterPi) + a * b;
+        return a * a + b * b < 1.0 ? corner : 0.0;
+    }
+    /// The plane's value at `base` (an index, a whole number) plus offsets.
+    double at(double base) const { return v[static_cast<int>(base)]; }
+
+    /// A disc of radius up to half a pitch: the nearer edges and the four
+    /// pixels around their corner.
+    double one(double x, double y, double r) const
+    {
+        const Where w = locate(x, y, r);
+        const double a = cut(min_of(w.tx, 1.0 - w.tx) * w.inv_r);
+        const double b = cut(min_of(w.ty, 1.0 - w.ty) * w.inv_r);
+        const double dx = w.tx < 0.5 ? -1.0 : 1.0, drow = w.ty < 0.5 ? -stride : stride;
+        const double area_x = segment(a), area_y = segment(b);
+        const double area_xy = quadrant(a, area_x, b, area_y);
+        const double base = (w.fy + kPad) * stride + (w.fx + kPad);
+        const double sum = ((at(base) * (((M_PI - area_x) - area_y) + area_xy)
+                             + at(base + dx) * (area_x - area_xy))
+                            + at(base + drow) * (area_y - area_xy))
+                           + at((base + drow) + dx) * area_xy;
         return (r * r) * sum;
     }
 
@@ -175,37 +192,20 @@ struct PlaneIntegrals {
     /// between half a pitch and a pitch in radius take it.
     double wide(double x, double y, double r) const
     {
-        const double gx = min_of(max_of(x * inv_pitch - x0, -kBig), kBig);
-        const double gy = min_of(max_of(y * inv_pitch - y0, -kBig), kBig);
-        const double fx = min_of(max_of(floor_of(gx), -1.0), nx);
-        const double fy = min_of(max_of(floor_of(gy), -1.0), ny);
-        const double tx = gx - fx, ty = gy - fy;
-        const double inv_r = pitch / r;
-        const auto cut = [](double t) { return min_of(max_of(t, 0.0), 1.0); };
-        const double aL = cut(tx * inv_r), aR = cut((1.0 - tx) * inv_r);
-        const double bB = cut(ty * inv_r), bT = cut((1.0 - ty) * inv_r);
-        const auto S = [&](double t) {
-            const double st = t * kK;
-            const int k = static_cast<int>(st);
-            return seg[k] + (st - static_cast<double>(k)) * (seg[k + 1] - seg[k]);
-        };
-        const double sL = S(aL), sR = S(aR), sB = S(bB), sT = S(bT);
-        const auto Q = [&](double a, double sa, double b, double sb) {
-            return a * a + b * b < 1.0 ? (0.5 * (sa + sb) - kQuarterPi) + a * b : 0.0;
-        };
-        const double qLB = Q(aL, sL, bB, sB), qLT = Q(aL, sL, bT, sT);
-        const double qRB = Q(aR, sR, bB, sB), qRT = Q(aR, sR, bT, sT);
-        const double base = (fy + kPad) * stride + (fx + kPad);
-        const auto at = [&](double dx, double drow) {
-            return static_cast<double>(v[static_cast<int>((base + drow) + dx)]);
-        };
+        const Where w = locate(x, y, r);
+        const double aL = cut(w.tx * w.inv_r), aR = cut((1.0 - w.tx) * w.inv_r);
+        const double bB = cut(w.ty * w.inv_r), bT = cut((1.0 - w.ty) * w.inv_r);
+        const double sL = segment(aL), sR = segment(aR), sB = segment(bB), sT = segment(bT);
+        const double qLB = quadrant(aL, sL, bB, sB), qLT = quadrant(aL, sL, bT, sT);
+        const double qRB = quadrant(aR, sR, bB, sB), qRT = quadrant(aR, sR, bT, sT);
+        const double base = (w.fy + kPad) * stride + (w.fx + kPad);
         const double centre = ((((M_PI - sL) - sR) - sB) - sT) + ((qLB + qLT) + (qRB + qRT));
-        const double sum = at(0.0, 0.0) * centre + at(-1.0, 0.0) * ((sL - qLB) - qLT)
-                           + at(1.0, 0.0) * ((sR - qRB) - qRT)
-                           + at(0.0, -stride) * ((sB - qLB) - qRB)
-                           + at(0.0, stride) * ((sT - qLT) - qRT) + at(-1.0, -stride) * qLB
-                           + at(-1.0, stride) * qLT + at(1.0, -stride) * qRB
-                           + at(1.0, stride) * qRT;
+        const double sum = at(base) * centre + at(base - 1.0) * ((sL - qLB) - qLT)
+                           + at(base + 1.0) * ((sR - qRB) - qRT)
+                           + at(base - stride) * ((sB - qLB) - qRB)
+                           + at(base + stride) * ((sT - qLT) - qRT)
+                           + at((base - stride) - 1.0) * qLB + at((base + stride) - 1.0) * qLT
+                           + at((base - stride) + 1.0) * qRB + at((base + stride) + 1.0) * qRT;
         return (r * r) * sum;
     }
 };
