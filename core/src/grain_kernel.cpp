@@ -100,6 +100,7 @@ void ExposurePlane::fill(const LayerExposure& exposure, const FrameGeometry& fra
 /// unless the first is greater, or less; truncating int conversions;
 /// gathers for the table and the plane), so that both give the same bits.
 struct PlaneIntegrals {
+    const SegmentTable* table;
     const double* seg;
     const float* v;
     double stride, nx, ny, inv_pitch, pitch, x0, y0;
@@ -110,7 +111,8 @@ struct PlaneIntegrals {
     static constexpr double kQuarterPi = 0.25 * M_PI;
 
     explicit PlaneIntegrals(const ExposurePlane& plane)
-        : seg(plane.m_segment->nodes())
+        : table(plane.m_segment)
+        , seg(plane.m_segment->nodes())
         , v(plane.m_padded.data())
         , stride(static_cast<double>(plane.m_padded_stride))
         , nx(static_cast<double>(plane.m_nx))
@@ -150,12 +152,7 @@ struct PlaneIntegrals {
     /// radius away).
     static double cut(double t) { return min_of(max_of(t, 0.0), 1.0); }
     /// S(t) from the table, t in [0, 1].
-    double segment(double t) const
-    {
-        const double st = t * kK;
-        const int k     = static_cast<int>(st);
-        return seg[k] + (st - static_cast<double>(k)) * (seg[k + 1] - seg[k]);
-    }
+    double segment(double t) const { return table->area(t); }
     /// The quadrant beyond a corner at distances a, b (in radii) whose
     /// segments are sa, sb: nothing unless the corner is inside the disc.
     static double quadrant(double a, double sa, double b, double sb)

@@ -139,10 +139,12 @@ void FastGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
 class SegmentTable {
 public:
     SegmentTable();
+    /// S(t) by linear interpolation, t in [0, 1] (the kernel's loops,
+    /// PlaneIntegrals, interpolate the same nodes the same way).
     double area(double t) const
     {
-        const double s = std::min(t, 1.0) * kIntervals;
-        const size_t k = static_cast<size_t>(s);
+        const double s = t * kIntervals;
+        const int k    = static_cast<int>(s);
         return m_area[k] + (s - static_cast<double>(k)) * (m_area[k + 1] - m_area[k]);
     }
     /// Largest absolute error of area() against the formula, measured at
@@ -216,7 +218,7 @@ public:
     }
 
 private:
-    /// Zeros around the window in the padded copy.
+    /// Pixels of zeros around the window in m_padded.
     static constexpr int64_t kPad = 2;
     friend struct PlaneIntegrals;
 
