@@ -77,8 +77,8 @@ void ExposurePlane::fill(const LayerExposure& exposure, const FrameGeometry& fra
     const int64_t y0 = clip(std::floor(rect.y0_um / p), frame.input_height);
     const int64_t x1 = clip(std::floor(rect.x1_um / p) + 1, frame.input_width);
     const int64_t y1 = clip(std::floor(rect.y1_um / p) + 1, frame.input_height);
-    m_pitch     = p;
-    m_inv_pitch = 1.0 / p;
+    m_pitch_um     = p;
+    m_per_pitch_um = 1.0 / p;
     m_x0 = static_cast<double>(x0);
     m_y0 = static_cast<double>(y0);
     m_w  = static_cast<double>(x1 - x0);
@@ -103,7 +103,9 @@ struct PlaneIntegrals {
     const SegmentTable* table;
     const double* seg;
     const float* v;
-    double stride, nx, ny, inv_pitch, pitch, x0, y0;
+    double stride, nx, ny;           ///< the padded row, the window (pixels)
+    double per_pitch_um, pitch_um;   ///< 1 / pitch, pitch
+    double x0, y0;                   ///< the window's first pixel
 
     static constexpr double kK    = SegmentTable::kIntervals;
     static constexpr double kPad  = static_cast<double>(ExposurePlane::kPad);
@@ -117,8 +119,8 @@ struct PlaneIntegrals {
         , stride(static_cast<double>(plane.m_padded_stride))
         , nx(static_cast<double>(plane.m_nx))
         , ny(static_cast<double>(plane.m_ny))
-        , inv_pitch(plane.m_inv_pitch)
-        , pitch(plane.m_pitch)
+        , per_pitch_um(plane.m_per_pitch_um)
+        , pitch_um(plane.m_pitch_um)
         , x0(plane.m_x0)
         , y0(plane.m_y0)
     {
@@ -140,13 +142,13 @@ struct PlaneIntegrals {
     struct Where {
         double fx, fy, tx, ty, inv_r;
     };
-    Where locate(double x, double y, double r) const
+    Where locate(double x_um, double y_um, double r_um) const
     {
-        const double gx = min_of(max_of(x * inv_pitch - x0, -kBig), kBig);
-        const double gy = min_of(max_of(y * inv_pitch - y0, -kBig), kBig);
+        const double gx = min_of(max_of(x_um * per_pitch_um - x0, -kBig), kBig);
+        const double gy = min_of(max_of(y_um * per_pitch_um - y0, -kBig), kBig);
         const double fx = min_of(max_of(floor_of(gx), -1.0), nx);
         const double fy = min_of(max_of(floor_of(gy), -1.0), ny);
-        return { fx, fy, gx - fx, gy - fy, pitch / r };
+        return { fx, fy, gx - fx, gy - fy, pitch_um / r_um };
     }
     /// Distance t in radii cut to [0, 1] (a disc does not cross an edge a
     /// radius away).
@@ -165,9 +167,9 @@ struct PlaneIntegrals {
 
     /// A disc of radius up to half a pitch: the nearer edges and the four
     /// pixels around their corner.
-    double one(double x, double y, double r) const
+    double one(double x_um, double y_um, double r_um) const
     {
-        const Where w = locate(x, y, r);
+        const Where w = locate(x_um, y_um, r_um);
         const double a = cut(min_of(w.tx, 1.0 - w.tx) * w.inv_r);
         const double b = cut(min_of(w.ty, 1.0 - w.ty) * w.inv_r);
         const double dx = w.tx < 0.5 ? -1.0 : 1.0, drow = w.ty < 0.5 ? -stride : stride;
@@ -178,7 +180,7 @@ struct PlaneIntegrals {
                              + at(base + dx) * (area_x - area_xy))
                             + at(base + drow) * (area_y - area_xy))
                            + at((base + drow) + dx) * area_xy;
-        return (r * r) * sum;
+        return (r_um * r_um) * sum;
     }
 
     /// The same integral for a disc of radius up to a pitch: it may cross
@@ -187,9 +189,9 @@ struct PlaneIntegrals {
     /// the segments beyond each edge less the quadrants beyond each of the
     /// four corners that lie inside the disc. Scalar: the few grains
     /// between half a pitch and a pitch in radius take it.
-    double wide(double x, double y, double r) const
+    double wide(double x_um, double y_um, double r_um) const
     {
-        const Where w = locate(x, y, r);
+        const Where w = locate(x_um, y_um, r_um);
         const double aL = cut(w.tx * w.inv_r), aR = cut((1.0 - w.tx) * w.inv_r);
         const double bB = cut(w.ty * w.inv_r), bT = cut((1.0 - w.ty) * w.inv_r);
         const double sL = segment(aL), sR = segment(aR), sB = segment(bB), sT = segment(bT);
@@ -203,7 +205,7 @@ struct PlaneIntegrals {
                            + at(base + stride) * ((sT - qLT) - qRT)
                            + at((base - stride) - 1.0) * qLB + at((base + stride) - 1.0) * qLT
                            + at((base - stride) + 1.0) * qRB + at((base + stride) + 1.0) * qRT;
-        return (r * r) * sum;
+        return (r_um * r_um) * sum;
     }
 };
 
@@ -238,7 +240,7 @@ __attribute__((target("avx2"))) void plane_integrals_avx2(const PlaneIntegrals& 
                                                           const double* x, const double* y,
                                                           const double* r, size_t n, double* out)
 {
-    const __m256d inv_pitch = _mm256_set1_pd(k.inv_pitch), pitch = _mm256_set1_pd(k.pitch);
+    const __m256d inv_pitch = _mm256_set1_pd(k.per_pitch_um), pitch = _mm256_set1_pd(k.pitch_um);
     const __m256d x0 = _mm256_set1_pd(k.x0), y0 = _mm256_set1_pd(k.y0);
     const __m256d big = _mm256_set1_pd(PlaneIntegrals::kBig), nbig = _mm256_set1_pd(-PlaneIntegrals::kBig);
     const __m256d one = _mm256_set1_pd(1.0), mone = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
@@ -315,7 +317,7 @@ void ExposurePlane::integrals_over_discs(const double* x_um, const double* y_um,
 double ExposurePlane::integral_over_disc(double x_um, double y_um, double r_um) const
 {
     const PlaneIntegrals k(*this);
-    return r_um <= 0.5 * m_pitch ? k.one(x_um, y_um, r_um) : k.wide(x_um, y_um, r_um);
+    return r_um <= 0.5 * m_pitch_um ? k.one(x_um, y_um, r_um) : k.wide(x_um, y_um, r_um);
 }
 
 }  // namespace filmgrain

@@ -175,7 +175,7 @@ public:
 
     /// The input pixel pitch: the largest radius integral_over_disc takes;
     /// integrals_over_discs takes half of it.
-    double pitch_um() const { return m_pitch; }
+    double pitch_um() const { return m_pitch_um; }
 
     /// The integral of v over the disc (value x um^2) against the
     /// box-reconstructed image, as LayerExposure::integrate_over_disc, for
@@ -210,7 +210,7 @@ public:
     {
         // floor() without a library call: negative values fall outside the
         // window whichever way they round, as the check below needs.
-        const double gx = x_um * m_inv_pitch - m_x0, gy = y_um * m_inv_pitch - m_y0;
+        const double gx = x_um * m_per_pitch_um - m_x0, gy = y_um * m_per_pitch_um - m_y0;
         if (!(gx >= 0.0 && gy >= 0.0 && gx < m_w && gy < m_h))
             return 0.0;
         const size_t fx = static_cast<size_t>(gx), fy = static_cast<size_t>(gy);
@@ -228,8 +228,8 @@ private:
     int64_t m_nx = 0, m_ny = 0;
     size_t m_padded_stride = 0;
     const SegmentTable* m_segment = &SegmentTable::shared();
-    double m_pitch = 0.0;
-    double m_inv_pitch = 0.0;
+    double m_pitch_um = 0.0;
+    double m_per_pitch_um = 0.0;
     double m_x0 = 0.0, m_y0 = 0.0, m_w = 0.0, m_h = 0.0;
 };
 

@@ -296,7 +296,7 @@ public:
                         const ExposurePlane& plane;
                         const LayerExposure& exposure;
                         std::vector<double>& values;
-                        double pitch;
+                        double pitch_um;  ///< the input pixel's
                         void prepare(const FastGrains::Batch& b) const
                         {
                             if (values.size() < b.n)
@@ -306,11 +306,12 @@ public:
                         }
                         double operator()(const FastGrains::Batch& b, size_t i) const
                         {
-                            const double r = b.r[i];
-                            if (r <= 0.5 * pitch)
+                            const double r_um = b.r[i];
+                            if (r_um <= 0.5 * pitch_um)
                                 return values[i];
-                            return r <= pitch ? plane.integral_over_disc(b.x[i], b.y[i], r)
-                                              : exposure.integrate_over_disc(b.x[i], b.y[i], r);
+                            return r_um <= pitch_um
+                                       ? plane.integral_over_disc(b.x[i], b.y[i], r_um)
+                                       : exposure.integrate_over_disc(b.x[i], b.y[i], r_um);
                         }
                     };
                     const Centre centre { scratch.plane };
