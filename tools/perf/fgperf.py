@@ -168,6 +168,26 @@ def write_image(path, array):
     out.close()
 
 
+# Octave bands of spatial frequency, as fractions of the scan's Nyquist
+# frequency, in which the reports compare noise power.
+NPS_BANDS = ((0.125, 0.25), (0.25, 0.5), (0.5, 1.0))
+
+
+def nps_octave_bands(t):
+    """Noise power (Wiener spectrum) of a patch of transmittance t (rows x
+    columns) in each of NPS_BANDS: the 2-D periodogram of the patch less its
+    mean, |FFT|^2 / pixels, averaged over the frequencies (radial, in units
+    of Nyquist) inside the band."""
+    tc = np.asarray(t, dtype=np.float64)
+    tc = tc - tc.mean()
+    h, w = tc.shape
+    power = np.abs(np.fft.fft2(tc)) ** 2 / tc.size
+    fy = np.abs(np.fft.fftfreq(h))[:, None] * 2  # 1 = Nyquist
+    fx = np.abs(np.fft.fftfreq(w))[None, :] * 2
+    f = np.sqrt(fx ** 2 + fy ** 2)
+    return [float(power[(f >= lo) & (f < hi)].mean()) for lo, hi in NPS_BANDS]
+
+
 def stock_json(binary, stock):
     """The stock (preset name or file) as complete JSON, from the CLI."""
     out = subprocess.run([binary, "--print-stock", stock], check=True, capture_output=True,

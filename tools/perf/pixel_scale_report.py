@@ -63,12 +63,7 @@ def step_metrics(D, base):
     h, w = D.shape
     bh, bw = h // 8, w // 8
     Tb = T[:bh * 8, :bw * 8].reshape(bh, 8, bw, 8).mean(axis=(1, 3))
-    Tc = T - T.mean()
-    P = np.abs(np.fft.fft2(Tc)) ** 2 / Tc.size
-    fy = np.abs(np.fft.fftfreq(h))[:, None] * 2  # 1 = Nyquist
-    fx = np.abs(np.fft.fftfreq(w))[None, :] * 2
-    f = np.sqrt(fx ** 2 + fy ** 2)
-    bands = [P[(f >= lo) & (f < hi)].mean() for lo, hi in ((0.125, 0.25), (0.25, 0.5), (0.5, 1.0))]
+    bands = fgperf.nps_octave_bands(T)
     q05, q95 = np.quantile(D, [0.05, 0.95])
     return {"mean": D.mean(), "sd": D.std(), "g48": (-np.log10(Tb)).std(), "nps": bands,
             "q05": q05, "q95": q95}
