@@ -212,6 +212,15 @@ def seed_list(seeds):
     return ("seed " if len(seeds) == 1 else "seeds ") + text
 
 
+def parse_seeds(text):
+    """"1-4,7" -> [1, 2, 3, 4, 7]."""
+    seeds = []
+    for part in text.split(","):
+        a, _, b = part.partition("-")
+        seeds += list(range(int(a), int(b) + 1)) if b else [int(a)]
+    return seeds
+
+
 class Scene:
     def __init__(self, name, args, stock, seeds, wedge, width_mm, roi=None, label="",
                  aperture_um=None, knob_seeds=None):
@@ -851,7 +860,8 @@ def main(argv=None):
     ap.add_argument("--scenes", default=None, help="comma-separated subset of scenes")
     ap.add_argument("--configs", default=None,
                     help="subset of configurations, separated by ';' (names hold commas)")
-    ap.add_argument("--seeds", default=None, help="comma-separated seeds (all scenes)")
+    ap.add_argument("--seeds", default=None,
+                    help="seeds for every scene, comma-separated, runs as A-B (e.g. 1-650)")
     ap.add_argument("--threads", type=int, default=0, help="--threads of each render (0: all)")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse renders already in --work (same arguments and binary)")
@@ -900,7 +910,7 @@ def main(argv=None):
         scenes = [s for s in scenes if s.name in args.scenes.split(",")]
     if args.seeds:
         for s in scenes:
-            s.seeds = s.knob_seeds = [int(v) for v in args.seeds.split(",")]
+            s.seeds = s.knob_seeds = parse_seeds(args.seeds)
 
     renderer = Renderer(binary, work, args.threads, args.reuse, log)
     summary, steps_rows, natural_rows, acceptance, acceptance_natural = [], [], [], {}, {}
