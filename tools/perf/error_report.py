@@ -634,19 +634,10 @@ def summarise_natural(acc):
 
 
 def verdict_natural(nat, budget):
-    """verdict_density's counts for the natural scene's three block sets
-    (all, edge, flat), CIs widened over the three."""
-    counts = {"within": 0, "unresolved": 0, "outside": 0}
-    for k in ("all", "edge", "flat"):
-        b, ci = nat[f"bias_{k}"], nat[f"ci_{k}"]
-        c = family_half_width(ci, nat[f"blocks_{k}"] - 1, 3) if ci > 0 else 0.0
-        if abs(b) + c <= budget:
-            counts["within"] += 1
-        elif abs(b) - c > budget:
-            counts["outside"] += 1
-        else:
-            counts["unresolved"] += 1
-    return counts
+    """verdict_biases for the natural scene's three block sets (all, edge,
+    flat), CIs widened over the three."""
+    return verdict_biases([(nat[f"bias_{k}"], nat[f"ci_{k}"], nat[f"blocks_{k}"] - 1)
+                           for k in ("all", "edge", "flat")], budget)
 
 
 def natural_edge_mask(scene, block):
@@ -707,23 +698,30 @@ def family_half_width(ci, df, checks):
     return ci / t975(df) * t_quantile(1 - 0.025 / max(checks, 1), df)
 
 
-def verdict_density(rows, budget):
-    """Auto at the default tolerance against |bias| <= budget, per step:
-    'within' if the whole CI lies inside +-budget, 'outside' if it lies
-    entirely beyond, else 'unresolved'; CIs at 95% for the row's steps
-    together (family_half_width)."""
+def verdict_biases(checks, budget):
+    """Biases against |bias| <= budget: each check is (bias, 95% half-width,
+    degrees of freedom); 'within' if the whole CI lies inside +-budget,
+    'outside' if it lies entirely beyond, else 'unresolved'; CIs widened so
+    that the checks hold at 95% together (family_half_width)."""
     counts = {"within": 0, "unresolved": 0, "outside": 0}
-    checks = 2 * len(rows)
-    for r in rows:
-        for b, ci in ((r["bias_mean"], r["ci_mean"]), (r["bias_macro"], r["ci_macro"])):
-            c = family_half_width(ci, r["blocks"] - 1, checks) if ci > 0 else 0.0
-            if abs(b) + c <= budget:
-                counts["within"] += 1
-            elif abs(b) - c > budget:
-                counts["outside"] += 1
-            else:
-                counts["unresolved"] += 1
+    for b, ci, df in checks:
+        c = family_half_width(ci, df, len(checks)) if ci > 0 else 0.0
+        if abs(b) + c <= budget:
+            counts["within"] += 1
+        elif abs(b) - c > budget:
+            counts["outside"] += 1
+        else:
+            counts["unresolved"] += 1
     return counts
+
+
+def verdict_density(rows, budget):
+    """Auto at the default tolerance against |bias| <= budget, per wedge
+    step: the mean of pixel densities and the macro density (verdict_biases
+    over the row's steps)."""
+    return verdict_biases([(b, ci, r["blocks"] - 1) for r in rows
+                           for b, ci in ((r["bias_mean"], r["ci_mean"]),
+                                         (r["bias_macro"], r["ci_macro"]))], budget)
 
 
 def verdict_ratios(checks, tolerance, not_applicable=0):
