@@ -624,22 +624,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pp.kinetics = KineticsMethod::curve;
             pp.curve    = curves[need.request];
             pp.fast     = std::make_shared<const FastGrains>(pp.grains);
-            // Exposure: integrated over the disc (from the tile's plane,
-            // grain_kernel.h) where nearly every grain is at most an input
-            // pixel in radius (the 99.87th percentile, z = 3); where grains
-            // are larger than input pixels (fine input pixels, e.g. a 16K
-            // input under the paper stock's 6 um grains) most would take
-            // the input image's integral over many pixels, 0.3-1.4 us
-            // each, and the kernel samples the centre as before (its error
-            // there is not measured; docs/performance). engine=fast
-            // samples the centre.
-            if (!settings.exposure_method && !fast) {
-                const double s   = pop.diameter_log_sigma;
-                const double r_q = 0.5 * std::exp(std::log(pop.diameter_um) - 0.5 * s * s
-                                                  + s * kTableAreaQuantileZ);
-                pp.exposure
-                    = r_q <= frame.input_pitch_um ? ExposureMethod::disc : ExposureMethod::centre;
-            }
+            // Exposure: integrated over the disc, as the population's
+            // plan already says (from the tile's plane for grains up to an
+            // input pixel in radius, grain_kernel.h; the input image's
+            // integral for larger ones, 0.3-1.4 us each). Sampling larger
+            // grains at their centre instead was measured biased by -0.10 D
+            // (-0.27 on edges) on a natural image under 1.5 um input pixels
+            // and 6 um grains (docs/performance/error_report.md,
+            // natural-fine). engine=fast samples the centre.
             // A curve error e moves a patch density by at most 0.434 n E[a] e.
             const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
                                        * pp.curve->max_interpolation_error();
@@ -885,7 +877,6 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             if (exposure == ExposureMethod::centre || mixed)
                 why << "exposure sampled at grain centres"
                     << (mixed ? " for the populations above marked so" : "")
-                    << (fast ? "" : " (the kernel's, where grains are larger than input pixels)")
                     << " (error at image edges, measured in docs/); ";
             if (exposure == ExposureMethod::disc
                 && std::any_of(plan.populations.begin(), plan.populations.end(),

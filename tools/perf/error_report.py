@@ -275,6 +275,11 @@ def all_scenes(small):
         Scene("natural", [GRACE_HOPPER, "--iscolorspace", "sRGB"], "color-negative", [1], False,
               4.0, roi=(128, 172, 256, 256),
               label="grace_hopper.jpg, color-negative, 4 mm wide, central 256x256"),
+        # Input pixels finer than the grains (1.5 um under paper's 6 um):
+        # where auto samples each grain's exposure at its centre.
+        Scene("natural-fine", [GRACE_HOPPER, "--iscolorspace", "sRGB"], "paper", [1], False,
+              0.768, roi=(128, 172, 256, 256),
+              label="grace_hopper.jpg, paper, 0.768 mm wide (1.5 um pixels), central 256x256"),
     ]
 
 
