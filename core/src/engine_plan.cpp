@@ -177,20 +177,38 @@ constexpr double kRasterShare = 0.25;
 /// measured; fewer per pixel is not measured.
 constexpr double kMinDevelopedPerPixel = 3.9;
 
+/// How much larger the raster's bias is where grains are large against the
+/// pixel than on the colour wedge its model was measured on (smallest mean
+/// radius / pitch 1.5 / 6.25 = 0.24): the bias of the mean of pixel
+/// densities comes from the per-pixel sampling noise of the open area
+/// relative to it, which grows as a pixel holds fewer holes. Measured at
+/// 16 rows per radius: the paper wedge (radius / pitch 0.48) 4x the
+/// model, a natural image under 1.5 um pixels and paper's 6 um grains
+/// (2.0) 6.9x; (ratio / 0.24)^2 covers both (4x and 69x: conservative
+/// for the second), 1 below the calibration.
+double raster_size_factor(double pitch_um, double smallest_radius_um)
+{
+    constexpr double kCalibrationRadiusPerPitch = 0.24;
+    const double q = smallest_radius_um / pitch_um / kCalibrationRadiusPerPitch;
+    return std::max(1.0, q * q);
+}
+
 /// Rows of raster coverage per pixel (its points across a pixel are 64):
 /// enough rows across the smallest mean grain radius for the tolerance, at
 /// most 256. The per-pixel sampling noise biases the mean of pixel
 /// densities (the log is convex), most where few points are uncovered.
 /// Measured on the colour wedge (6.25 um pixels, docs/performance): the
 /// largest step bias falls as (rows per radius)^-2.3 and is 0.0009 at 16
-/// rows per radius (raster_bias()); rows are chosen to keep it below
+/// rows per radius (raster_bias()), times raster_size_factor where grains
+/// are larger against the pixel; rows are chosen to keep it below
 /// `budget`, the density error the raster may add: rows per radius =
-/// (0.52 / budget)^(1 / 2.3), 21 at 0.0005 (a quarter of the default
-/// tolerance), 13.4 at 0.0013. The fast engine takes 4 rows per radius,
-/// whatever the bias (~0.02-0.05).
+/// (0.52 f / budget)^(1 / 2.3), 21 at 0.0005 (a quarter of the default
+/// tolerance) and f = 1, 13.4 at 0.0013. The fast engine takes 4 rows per
+/// radius, whatever the bias (~0.02-0.05).
 int raster_samples(double pitch_um, double smallest_radius_um, double budget, bool fast)
 {
-    const double rows_per_radius = fast ? 4.0 : std::pow(0.52 / budget, 1.0 / 2.3);
+    const double f = raster_size_factor(pitch_um, smallest_radius_um);
+    const double rows_per_radius = fast ? 4.0 : std::pow(0.52 * f / budget, 1.0 / 2.3);
     const double want = std::ceil(rows_per_radius * pitch_um / smallest_radius_um);
     return static_cast<int>(std::clamp(want, 1.0, 256.0));
 }
@@ -200,7 +218,8 @@ int raster_samples(double pitch_um, double smallest_radius_um, double budget, bo
 double raster_bias(int rows, double pitch_um, double smallest_radius_um)
 {
     const double rows_per_radius = rows * smallest_radius_um / pitch_um;
-    return 0.52 * std::pow(rows_per_radius, -2.3);
+    return 0.52 * raster_size_factor(pitch_um, smallest_radius_um)
+           * std::pow(rows_per_radius, -2.3);
 }
 
 /// shared_pixel_model's models (0.2 MB each without inhibition, ~5 MB with
