@@ -629,10 +629,19 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         }
         pp.table = rq.table;
         const Population& pop = stock.layers[need.layer].populations[need.population];
-        plan.error_estimate += table_density_error(pop, *pp.table, need.photons_per_um2_max);
-        kinetics_bound[need.layer] += table_density_error(
+        // The frame's bound (what the raster's rows are sized from) over
+        // every exposure the table serves, to 16x (4 stops) past where a
+        // mean-sized grain's mean count is the table's largest; the
+        // region's estimate (--stats) is over a part of that range, so
+        // capped by it: both take the largest of a grid of exposures, and
+        // a grid point of the region's may land nearer the peak by ~0.1%,
+        // which made error_estimate exceed the tolerance it was sized for.
+        const double bound = table_density_error(
             pop, *pp.table,
-            static_cast<double>(pp.table->max_photons()) / pp.grains.mean_area_um2());
+            16.0 * static_cast<double>(pp.table->max_photons()) / pp.grains.mean_area_um2());
+        plan.error_estimate
+            += std::min(bound, table_density_error(pop, *pp.table, need.photons_per_um2_max));
+        kinetics_bound[need.layer] += bound;
         // The fast per-grain kernel (P(develop | mean photons), one uniform
         // per grain) wherever a table is built, unless the table itself
         // was asked for.
@@ -721,17 +730,19 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         // the raster's share.
         const double budget = std::max(kRasterShare * settings.tolerance,
                                        settings.tolerance - kinetics_bound[l]);
-        const int samples = raster_samples(std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
-                                           smallest_radius_um, budget, fast);
+        const double pitch_um = std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
+        int samples = raster_samples(pitch_um, smallest_radius_um, budget, fast);
+        // The bias model evaluated as error_estimate adds it: within the
+        // budget to the last bit.
+        while (!fast && samples < 256 && raster_bias(samples, pitch_um, smallest_radius_um) > budget)
+            ++samples;
         if (!settings.coverage && (all_curves(plan) || fast))
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
             continue;
         plan.coverage_samples
             = settings.coverage_samples > 0 ? settings.coverage_samples : samples;
-        plan.error_estimate += raster_bias(
-            plan.coverage_samples, std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um),
-            smallest_radius_um);
+        plan.error_estimate += raster_bias(plan.coverage_samples, pitch_um, smallest_radius_um);
     }
 
     // Scale (MODEL.md 5 at pixel scale): a layer whose grains all run the
