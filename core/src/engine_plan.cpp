@@ -658,8 +658,9 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             // integral for larger ones, 0.3-1.4 us each). Sampling larger
             // grains at their centre instead was measured biased by -0.10 D
             // (-0.27 on edges) on a natural image under 1.5 um input pixels
-            // and 6 um grains (docs/performance/error_report.md,
-            // natural-fine). engine=fast samples the centre.
+            // and 6 um grains (docs/performance/README.md, "Grains larger
+            // than the input pixels, measured"). engine=fast samples the
+            // centre.
             // A curve error e moves a patch density by at most 0.434 n E[a] e.
             const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
                                        * pp.curve->max_interpolation_error();

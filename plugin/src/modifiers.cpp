@@ -496,7 +496,8 @@ const Modifier kModifiers[] = {
       "dye layer's sample rows (disc clouds) or points per axis (gaussian) per pixel, [1, 256]",
       [](const FilmgrainCommand&) {
           return engine_choice("scanline: 2 chords per smallest mean grain radius; raster: rows "
-                               "for the tolerance, 21 per smallest mean radius at 0.002, at "
+                               "for the tolerance, 21 per smallest mean radius at 0.002 (more "
+                               "where grains are large against the pixel), at "
                                "most 256 (fast: 4); dye: 2 per smallest mean cloud radius, 2 to "
                                "16 (exact: 8 per radius, 4 to 64)");
       },

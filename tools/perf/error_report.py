@@ -30,6 +30,9 @@ Scenes
   natural      grace_hopper.jpg (matplotlib's sample data), --iscolorspace
                sRGB, width_mm=4 (7.8 um pixels), the central 256x256 pixels
                (roi), seed 1
+  natural-fine the same image at width_mm=0.768 (1.5 um pixels) under the
+               paper stock's 6 um grains: grains larger than the input
+               pixels; seed 1
 
 Metrics (definitions; the report repeats them)
   patch        the interior of a wedge step: the step minus a margin of two
