@@ -193,6 +193,15 @@ double raster_size_factor(double pitch_um, double smallest_radius_um)
     return std::max(1.0, q * q);
 }
 
+/// The bias model of raster_samples (below): the largest step bias of the
+/// mean of pixel densities with `rows` per pixel.
+double raster_bias(int rows, double pitch_um, double smallest_radius_um)
+{
+    const double rows_per_radius = rows * smallest_radius_um / pitch_um;
+    return 0.52 * raster_size_factor(pitch_um, smallest_radius_um)
+           * std::pow(rows_per_radius, -2.3);
+}
+
 /// Rows of raster coverage per pixel (its points across a pixel are 64):
 /// enough rows across the smallest mean grain radius for the tolerance, at
 /// most 256. The per-pixel sampling noise biases the mean of pixel
@@ -210,16 +219,13 @@ int raster_samples(double pitch_um, double smallest_radius_um, double budget, bo
     const double f = raster_size_factor(pitch_um, smallest_radius_um);
     const double rows_per_radius = fast ? 4.0 : std::pow(0.52 * f / budget, 1.0 / 2.3);
     const double want = std::ceil(rows_per_radius * pitch_um / smallest_radius_um);
-    return static_cast<int>(std::clamp(want, 1.0, 256.0));
-}
-
-/// The bias model of raster_samples: the largest step bias of the mean of
-/// pixel densities with `rows` per pixel.
-double raster_bias(int rows, double pitch_um, double smallest_radius_um)
-{
-    const double rows_per_radius = rows * smallest_radius_um / pitch_um;
-    return 0.52 * raster_size_factor(pitch_um, smallest_radius_um)
-           * std::pow(rows_per_radius, -2.3);
+    int rows = static_cast<int>(std::clamp(want, 1.0, 256.0));
+    // The bias model evaluated as error_estimate adds it (raster_bias):
+    // within the budget to the last bit, where the formula's rounding
+    // would leave it a hair above.
+    while (!fast && rows < 256 && raster_bias(rows, pitch_um, smallest_radius_um) > budget)
+        ++rows;
+    return rows;
 }
 
 /// shared_pixel_model's models (0.2 MB each without inhibition, ~5 MB with
@@ -324,293 +330,394 @@ InputRegion input_region(const ImageView& input, const FrameGeometry& frame, con
     return out;
 }
 
-Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageView& input,
-                   const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
-                   std::vector<LayerPlan>& out, const std::atomic<bool>* cancel)
-{
-    out.clear();
-    const auto cancelled = [cancel] { return cancel_requested(cancel); };
-    const double lxs_per_value
-        = exposure_lxs_per_unit_value(stock.exposure_at_grey_lxs, scene.exposure_stops);
-    const bool exact = settings.engine == Engine::exact;
-    const bool fast  = settings.engine == Engine::fast;
-    const Development development(stock);
-    // A table asked for (kinetics=table or curve), or needed by scale=pixel:
-    // built whatever it costs.
-    const bool forced_table = settings.kinetics.has_value() || settings.scale == ScaleMethod::pixel;
+namespace {
 
-    // A table depends only on the rates (the shutter and development are
-    // the scene's): populations with the same rates share one, built once
-    // for the largest photon count and the smallest error any of them needs.
-    struct TableRequest {
-        KineticsRates rates;
-        DevelopTable::Options options;
-        std::shared_ptr<const DevelopTable> table;
-        double seconds = 0.0;
-        /// Chain steps the grains it serves would cost without it.
-        double grain_steps = 0.0;
-    };
-    std::vector<TableRequest> requests;
-    struct Need {
-        size_t layer, population, request;
-        double photons_per_um2_max;
-        bool capped;
-    };
-    std::vector<Need> needs;
-    std::vector<double> v_max(stock.layers.size(), 0.0);
-
-    // Light spread (MODEL.md 9) first: it changes the exposure every later
-    // choice reads. One layer per worker; each is a pure function of the
-    // layer and the whole input frame.
-    std::vector<std::shared_ptr<const std::vector<float>>> spread(stock.layers.size());
-    std::vector<double> spread_seconds(stock.layers.size(), 0.0);
+/// What every chooser reads: the render's arguments and what follows from
+/// them alone.
+struct PlanContext {
+    PlanContext(const Stock& stock_, const SceneSettings& scene_, const ImageView& input_,
+                const FrameGeometry& frame_, const Roi& roi_, const RenderSettings& settings_,
+                const std::atomic<bool>* cancel_)
+        : stock(stock_)
+        , scene(scene_)
+        , input(input_)
+        , frame(frame_)
+        , roi(roi_)
+        , settings(settings_)
+        , cancel(cancel_)
+        , lxs_per_value(exposure_lxs_per_unit_value(stock_.exposure_at_grey_lxs,
+                                                    scene_.exposure_stops))
+        , exact(settings_.engine == Engine::exact)
+        , fast(settings_.engine == Engine::fast)
+        , forced_table(settings_.kinetics.has_value() || settings_.scale == ScaleMethod::pixel)
+        , development(stock_)
     {
-        std::vector<size_t> spreading;
-        for (size_t l = 0; l < stock.layers.size(); ++l)
-            if (stock.layers[l].spreads_light())
-                spreading.push_back(l);
-        std::atomic<bool> stop { false };
-        parallel_for(static_cast<int64_t>(spreading.size()), settings.nthreads, stop,
-                     [&](int, int64_t i) {
-            if (cancelled())
-                return;
-            const auto t0      = std::chrono::steady_clock::now();
-            const size_t l     = spreading[static_cast<size_t>(i)];
-            const Layer& layer = stock.layers[l];
-            spread[l]          = std::make_shared<const std::vector<float>>(spread_exposure(
-                layer, LayerExposure(input, layer.sensitivity, frame.input_pitch_um),
-                input.frame_width(), input.frame_height(), frame.input_pitch_um));
-            spread_seconds[l]
-                = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        });
     }
 
-    if (cancelled())
-        return Status::error("render cancelled");
+    const Stock& stock;
+    const SceneSettings& scene;
+    const ImageView& input;
+    const FrameGeometry& frame;
+    const Roi& roi;
+    const RenderSettings& settings;
+    const std::atomic<bool>* cancel;
+    /// Exposure (lxs) per unit of input value (MODEL.md 2).
+    double lxs_per_value;
+    bool exact, fast;
+    /// A table asked for (kinetics=table or curve), or needed by
+    /// scale=pixel: built whatever it costs.
+    bool forced_table;
+    Development development;
 
-    // Each layer's exposure value: the spread one, or the input's.
+    bool cancelled() const { return cancel_requested(cancel); }
+};
+
+/// The smallest mean grain radius of a layer's populations.
+double smallest_mean_radius_um(const Layer& layer)
+{
+    double r_um = 1e300;
+    for (const Population& pop : layer.populations)
+        r_um = std::min(r_um, 0.5 * pop.diameter_um);
+    return r_um;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// ---- Light spread and inhibition (MODEL.md 9, 10): the exposure every
+// later choice reads.
+
+/// The spread exposure of every layer that spreads light (null for the
+/// others), one layer per worker, and the seconds each took; each is a pure
+/// function of the layer and the whole input frame.
+struct SpreadLight {
+    std::vector<std::shared_ptr<const std::vector<float>>> values;
+    std::vector<double> seconds;
+};
+SpreadLight spread_light(const PlanContext& c)
+{
+    const size_t n = c.stock.layers.size();
+    SpreadLight out { std::vector<std::shared_ptr<const std::vector<float>>>(n),
+                      std::vector<double>(n, 0.0) };
+    std::vector<size_t> spreading;
+    for (size_t l = 0; l < n; ++l)
+        if (c.stock.layers[l].spreads_light())
+            spreading.push_back(l);
+    std::atomic<bool> stop { false };
+    parallel_for(static_cast<int64_t>(spreading.size()), c.settings.nthreads, stop,
+                 [&](int, int64_t i) {
+        if (c.cancelled())
+            return;
+        const auto t0      = std::chrono::steady_clock::now();
+        const size_t l     = spreading[static_cast<size_t>(i)];
+        const Layer& layer = c.stock.layers[l];
+        out.values[l]      = std::make_shared<const std::vector<float>>(spread_exposure(
+            layer, LayerExposure(c.input, layer.sensitivity, c.frame.input_pitch_um),
+            c.input.frame_width(), c.input.frame_height(), c.frame.input_pitch_um));
+        out.seconds[l] = seconds_since(t0);
+    });
+    return out;
+}
+
+/// Each layer's exposure value: the spread one, or the input's.
+std::vector<LayerExposure> layer_exposures(const PlanContext& c, const SpreadLight& spread)
+{
     std::vector<LayerExposure> exposures;
-    for (size_t l = 0; l < stock.layers.size(); ++l)
-        exposures.push_back(spread[l] ? LayerExposure(spread_view(*spread[l], input),
-                                                      { 1.0, 0.0, 0.0 }, frame.input_pitch_um)
-                                      : LayerExposure(input, stock.layers[l].sensitivity,
-                                                      frame.input_pitch_um));
+    for (size_t l = 0; l < c.stock.layers.size(); ++l)
+        exposures.push_back(spread.values[l]
+                                ? LayerExposure(spread_view(*spread.values[l], c.input),
+                                                { 1.0, 0.0, 0.0 }, c.frame.input_pitch_um)
+                                : LayerExposure(c.input, c.stock.layers[l].sensitivity,
+                                                c.frame.input_pitch_um));
+    return exposures;
+}
 
-    // Development inhibitors (MODEL.md 10), from those exposures.
-    InhibitionPlan inhibition;
-    double inhibition_seconds = 0.0;
-    if (stock.inhibits()) {
-        const auto t0 = std::chrono::steady_clock::now();
-        std::vector<const LayerExposure*> views;
-        for (const LayerExposure& e : exposures)
-            views.push_back(&e);
-        if (Status s = plan_inhibition(stock, scene, views, input.frame_width(),
-                                       input.frame_height(), frame.input_pitch_um,
-                                       settings.nthreads, inhibition, cancel);
-            !s)
-            return s;
-        inhibition_seconds
-            = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+/// Development inhibitors (MODEL.md 10), from the layers' exposures.
+Status plan_inhibitors(const PlanContext& c, const std::vector<LayerExposure>& exposures,
+                       InhibitionPlan& inhibition, double& seconds)
+{
+    if (!c.stock.inhibits())
+        return {};
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<const LayerExposure*> views;
+    for (const LayerExposure& e : exposures)
+        views.push_back(&e);
+    if (Status s = plan_inhibition(c.stock, c.scene, views, c.input.frame_width(),
+                                   c.input.frame_height(), c.frame.input_pitch_um,
+                                   c.settings.nthreads, inhibition, c.cancel);
+        !s)
+        return s;
+    seconds = seconds_since(t0);
+    return {};
+}
+
+// ---- A layer's grains, exposure (MODEL.md 1-2) and first coverage.
+
+/// The exposure chooser (MODEL.md 2): over each grain's disc, but at its
+/// centre in the fast engine, unless the settings say.
+ExposureMethod choose_exposure(const PlanContext& c)
+{
+    if (c.settings.exposure_method)
+        return *c.settings.exposure_method;
+    return c.fast ? ExposureMethod::centre : ExposureMethod::disc;
+}
+
+/// The coverage chooser (MODEL.md 5), before the kinetics are known: exact
+/// (scanlines in the fast engine) unless the settings say; the raster is
+/// chosen later, where every grain runs the kernel (choose_raster).
+/// Sub-scanlines are spaced by a fraction of the smallest mean grain radius
+/// (not of the pixel): the sampling error of a disc's area depends on how
+/// many chords cross it, so every grain is crossed by about
+/// 2 * chords_per_radius chords whatever the scan resolution. Auto keeps
+/// the exact coverage: scanline sampling is unbiased in mean transmittance
+/// but its per-pixel noise biases the mean of per-pixel densities (the log
+/// is convex), and exact coverage per block (grid_coverage) costs little
+/// more.
+void choose_first_coverage(const PlanContext& c, const Layer& layer, LayerPlan& plan)
+{
+    const double chords_per_radius = 2.0;
+    plan.coverage = c.fast ? CoverageMethod::scanline : CoverageMethod::exact;
+    plan.coverage_samples = static_cast<int>(std::clamp(
+        std::ceil(chords_per_radius * c.frame.scan_pitch_y_um / smallest_mean_radius_um(layer)),
+        1.0, 256.0));
+    if (c.settings.coverage)
+        plan.coverage = *c.settings.coverage;
+    if (c.settings.coverage_samples > 0)
+        plan.coverage_samples = c.settings.coverage_samples;
+}
+
+/// A layer's plan before its kinetics: its populations' grains and rates,
+/// how far their images reach, the exposure and first coverage methods.
+LayerPlan start_layer(const PlanContext& c, size_t l, const LayerExposure& exposure,
+                      double setup_seconds, std::shared_ptr<const std::vector<float>> spread,
+                      std::shared_ptr<const FramePlane> log_factor)
+{
+    const Layer& layer = c.stock.layers[l];
+    LayerPlan plan { exposure, {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0,
+                     setup_seconds, std::move(spread), std::move(log_factor) };
+    const ExposureMethod method = choose_exposure(c);
+    double margin_um            = 0.0;
+    for (size_t p = 0; p < layer.populations.size(); ++p) {
+        const Population& pop = layer.populations[p];
+        PopulationPlan pp { PopulationGrains(pop, grain_seed(c.scene), static_cast<uint32_t>(l),
+                                             static_cast<uint32_t>(p)),
+                            pop.quantum_efficiency * kPhotonsPerUm2PerLxs * c.lxs_per_value,
+                            { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
+                            pop.rate_area_exponent,
+                            KineticsMethod::chain,
+                            method,
+                            nullptr, nullptr, nullptr };
+        margin_um = std::max(margin_um, std::max(1.0, image_reach_factor(layer))
+                                            * pp.grains.max_radius_um());
+        plan.populations.push_back(std::move(pp));
     }
+    plan.margin_um   = margin_um;
+    plan.image_reach = image_reach_factor(layer);
+    choose_first_coverage(c, layer, plan);
+    return plan;
+}
 
-    for (size_t l = 0; l < stock.layers.size(); ++l) {
-        const Layer& layer = stock.layers[l];
-        LayerPlan plan { exposures[l], {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0,
-                         spread_seconds[l] + inhibition_seconds / stock.layers.size(), spread[l],
-                         inhibition.log_factor.empty() ? nullptr : inhibition.log_factor[l] };
-        double margin_um = 0.0, n_mean_area = 0.0, smallest_radius_um = 1e300;
-        for (size_t p = 0; p < layer.populations.size(); ++p) {
-            const Population& pop = layer.populations[p];
-            PopulationPlan pp { PopulationGrains(pop, grain_seed(scene), static_cast<uint32_t>(l),
-                                                 static_cast<uint32_t>(p)),
-                                pop.quantum_efficiency * kPhotonsPerUm2PerLxs * lxs_per_value,
-                                { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
-                                pop.rate_area_exponent,
-                                KineticsMethod::chain,
-                                ExposureMethod::disc,
-                                nullptr, nullptr, nullptr };
-            margin_um = std::max(margin_um, std::max(1.0, image_reach_factor(layer))
-                                                * pp.grains.max_radius_um());
-            n_mean_area += pop.grains_per_um2 * pp.grains.mean_area_um2();
-            smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
-            plan.populations.push_back(std::move(pp));
-        }
-        plan.margin_um   = margin_um;
-        plan.image_reach = image_reach_factor(layer);
-        // Exposure (MODEL.md 2).
-        ExposureMethod exposure = fast ? ExposureMethod::centre : ExposureMethod::disc;
-        if (settings.exposure_method)
-            exposure = *settings.exposure_method;
-        // Coverage (MODEL.md 5).
-        // Sub-scanlines are spaced by a fraction of the smallest mean grain
-        // radius (not of the pixel): the sampling error of a disc's area
-        // depends on how many chords cross it, so every grain is crossed by
-        // about 2 * kChordsPerRadius chords whatever the scan resolution.
-        // Auto keeps the exact coverage: scanline sampling is unbiased in
-        // mean transmittance but its per-pixel noise biases the mean of
-        // per-pixel densities (the log is convex), and exact coverage per
-        // block (grid_coverage) costs little more.
-        const double chords_per_radius = 2.0;
-        plan.coverage = fast ? CoverageMethod::scanline : CoverageMethod::exact;
-        plan.coverage_samples = static_cast<int>(std::clamp(
-            std::ceil(chords_per_radius * frame.scan_pitch_y_um / smallest_radius_um), 1.0,
-            256.0));
-        if (settings.coverage)
-            plan.coverage = *settings.coverage;
-        if (settings.coverage_samples > 0)
-            plan.coverage_samples = settings.coverage_samples;
+// ---- Kinetics (MODEL.md 3-4): the chain, or a table of P(develop | N).
 
-        // Kinetics (MODEL.md 3-4), per population.
-        const RegionValues values
-            = region_values(plan.exposure, input_region(input, frame, roi, margin_um));
-        v_max[l] = values.max;
-        std::ostringstream why;
-        for (size_t p = 0; p < plan.populations.size(); ++p) {
-            PopulationPlan& pp    = plan.populations[p];
-            const Population& pop = layer.populations[p];
-            pp.exposure           = exposure;
-            const double mean_grain_photons
-                = pp.photons_per_value_um2 * pp.grains.mean_area_um2();
-            if (mean_grain_photons * values.max > kMaxMeanPhotonsPerGrain)
-                return Status::errorf(
-                    "input pixel (", values.max_x, ", ", values.max_y, ") gives layer '",
-                    layer.name, "' an exposure of ", format_g(values.max * lxs_per_value),
-                    " lxs: ", format_g(mean_grain_photons * values.max),
-                    " absorbed photons per mean grain (population ", p, "), above the limit of ",
-                    format_g(kMaxMeanPhotonsPerGrain),
-                    " (README, Limits and guarantees): lower exposure= or clamp the input");
-            if (exact) {
-                pp.kinetics = KineticsMethod::chain;
-                continue;
-            }
-            KineticsMethod want = settings.kinetics ? *settings.kinetics : KineticsMethod::table;
-            // The curve is built from the table: both ask for one.
-            if (want == KineticsMethod::curve)
-                want = KineticsMethod::table;
-            if (want == KineticsMethod::table && pop.rate_area_exponent != 0.0) {
-                want = KineticsMethod::early_stop;
-                why << "population " << p
-                    << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
-                       "so no table: the chain runs until each outcome is decided; ";
-            }
-            if (want == KineticsMethod::table && v_max[l] <= 0.0
-                && settings.scale != ScaleMethod::pixel) {
-                want = KineticsMethod::early_stop;
-                why << "population " << p << ": no light reaches it: fog only; ";
-            }
-            pp.kinetics = want;
-            if (want != KineticsMethod::table)
-                continue;
-            // What the frame's grains would cost without a table, at grey:
-            // their early-stopped chains, and the per-grain work the table
-            // saves. (The whole frame, and grey rather than the pixels: a
-            // ROI render must decide as the full frame does.) Not needed
-            // when the table is asked for explicitly.
-            const double steps
-                = forced_table
-                      ? 0.0
-                      : pop.grains_per_um2 * frame.width_um * frame.height_um
-                            * (early_stop_steps_per_grain(
-                                   pop, pp.rates, pp.photons_per_value_um2 * kGreyValue,
-                                   scene.shutter_s, development,
-                                   hash_ids(grain_seed(scene), 0x9170, l, p))
-                               + kTableSavedStepsPerGrain);
-            // The photon count of a grain short of the largest ones at the
-            // table's top value, plus 6 Poisson sigmas; brighter grains run
-            // the early-stopped chain (quickly decided: they develop).
-            const double s      = pop.diameter_log_sigma;
-            const double d_q    = std::exp(std::log(pop.diameter_um) - 0.5 * s * s
-                                           + s * kTableAreaQuantileZ);
-            const double lam
-                = pp.photons_per_value_um2 * kTableTopValue * M_PI / 4.0 * d_q * d_q;
-            const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
-            // Budget: a node error e moves a patch density by at most
-            // 0.434 n E[a] e; nodes' errors partly average (estimated below).
-            const double target = std::max(fast ? 5e-3 : 0.0, kTableShare * settings.tolerance
-                                                                  / (kLog10E * n_mean_area));
-            // Rounded up to a power of two so that renders share tables
-            // (shared_develop_table). The table's stream is the same for
-            // every seed and frame (keyed by the rates' order only): a
-            // sequence's frames (and any seed) share one table, so the
-            // table's own error is the same on every frame (no flicker of
-            // mean density from frame to frame) and is paid once per
-            // process; frame_seed(seed, frame) still renders as the single
-            // image of that seed.
-            uint64_t n_max = 64;
-            while (n_max < n_need && n_max < kTablePhotonCap)
-                n_max *= 2;
-            size_t r = 0;
-            while (r < requests.size()
-                   && !(requests[r].rates.k_pair_per_s == pp.rates.k_pair_per_s
-                        && requests[r].rates.k_join_per_s == pp.rates.k_join_per_s
-                        && requests[r].rates.k_loss_per_s == pp.rates.k_loss_per_s))
-                ++r;
-            if (r == requests.size()) {
-                TableRequest req;
-                req.rates                         = pp.rates;
-                req.options.max_photons           = n_max;
-                req.options.target_standard_error = target;
-                req.options.stream_key            = hash_ids(0x7ab1e, r);
-                req.options.nthreads              = settings.nthreads;
-                req.options.cancel                = cancel;
-                req.grain_steps                   = steps;
-                requests.push_back(req);
-            } else {
-                auto& o       = requests[r].options;
-                o.max_photons = std::max(o.max_photons, n_max);
-                o.target_standard_error = std::min(o.target_standard_error, target);
-                requests[r].grain_steps += steps;
-            }
-            needs.push_back({ l, p, r, pp.photons_per_value_um2 * v_max[l],
-                              n_need > kTablePhotonCap });
-        }
-        plan.reason = why.str();
-        out.push_back(std::move(plan));
+/// A table depends only on the rates (the shutter and development are the
+/// scene's): populations with the same rates share one, built once for the
+/// largest photon count and the smallest error any of them needs.
+struct TableRequest {
+    KineticsRates rates;
+    DevelopTable::Options options;
+    std::shared_ptr<const DevelopTable> table;
+    double seconds = 0.0;
+    /// Chain steps the grains it serves would cost without it.
+    double grain_steps = 0.0;
+};
+/// A population that asked for a table: which request serves it, the
+/// largest photons per square micrometre its region gives, and whether its
+/// brightest grains pass the table's photon cap.
+struct TableNeed {
+    size_t layer, population, request;
+    double photons_per_um2_max;
+    bool capped;
+};
+struct TableRequests {
+    std::vector<TableRequest> requests;
+    std::vector<TableNeed> needs;
+};
+
+/// Asks for a table for population p of layer l, whose region's largest
+/// exposure value is v_max.
+void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPlan& pp,
+                   double n_mean_area, double v_max, TableRequests& tables)
+{
+    const Population& pop = c.stock.layers[l].populations[p];
+    // What the frame's grains would cost without a table, at grey: their
+    // early-stopped chains, and the per-grain work the table saves. (The
+    // whole frame, and grey rather than the pixels: a ROI render must
+    // decide as the full frame does.) Not needed when the table is asked
+    // for explicitly.
+    const double steps
+        = c.forced_table
+              ? 0.0
+              : pop.grains_per_um2 * c.frame.width_um * c.frame.height_um
+                    * (early_stop_steps_per_grain(pop, pp.rates, pp.photons_per_value_um2 * kGreyValue,
+                                                  c.scene.shutter_s, c.development,
+                                                  hash_ids(grain_seed(c.scene), 0x9170, l, p))
+                       + kTableSavedStepsPerGrain);
+    // The photon count of a grain short of the largest ones at the table's
+    // top value, plus 6 Poisson sigmas; brighter grains run the
+    // early-stopped chain (quickly decided: they develop).
+    const double s   = pop.diameter_log_sigma;
+    const double d_q = std::exp(std::log(pop.diameter_um) - 0.5 * s * s + s * kTableAreaQuantileZ);
+    const double lam = pp.photons_per_value_um2 * kTableTopValue * M_PI / 4.0 * d_q * d_q;
+    const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
+    // Budget: a node error e moves a patch density by at most
+    // 0.434 n E[a] e; nodes' errors partly average (estimated below).
+    const double target = std::max(c.fast ? 5e-3 : 0.0,
+                                   kTableShare * c.settings.tolerance / (kLog10E * n_mean_area));
+    // Rounded up to a power of two so that renders share tables
+    // (shared_develop_table). The table's stream is the same for every seed
+    // and frame (keyed by the rates' order only): a sequence's frames (and
+    // any seed) share one table, so the table's own error is the same on
+    // every frame (no flicker of mean density from frame to frame) and is
+    // paid once per process; frame_seed(seed, frame) still renders as the
+    // single image of that seed.
+    uint64_t n_max = 64;
+    while (n_max < n_need && n_max < kTablePhotonCap)
+        n_max *= 2;
+    std::vector<TableRequest>& requests = tables.requests;
+    size_t r = 0;
+    while (r < requests.size()
+           && !(requests[r].rates.k_pair_per_s == pp.rates.k_pair_per_s
+                && requests[r].rates.k_join_per_s == pp.rates.k_join_per_s
+                && requests[r].rates.k_loss_per_s == pp.rates.k_loss_per_s))
+        ++r;
+    if (r == requests.size()) {
+        TableRequest req;
+        req.rates                         = pp.rates;
+        req.options.max_photons           = n_max;
+        req.options.target_standard_error = target;
+        req.options.stream_key            = hash_ids(0x7ab1e, r);
+        req.options.nthreads              = c.settings.nthreads;
+        req.options.cancel                = c.cancel;
+        req.grain_steps                   = steps;
+        requests.push_back(req);
+    } else {
+        auto& o                 = requests[r].options;
+        o.max_photons           = std::max(o.max_photons, n_max);
+        o.target_standard_error = std::min(o.target_standard_error, target);
+        requests[r].grain_steps += steps;
     }
+    tables.needs.push_back({ l, p, r, pp.photons_per_value_um2 * v_max, n_need > kTablePhotonCap });
+}
 
-    // A table is built only when it costs fewer chain steps (events and
-    // photon arrivals) than the frame's grains would spend in the
-    // early-stopped chain, which decides most grains within a few steps,
-    // and in the per-grain work the table saves (kTableSavedStepsPerGrain):
-    // otherwise that chain runs, with the exact engine's results and no
-    // error of its own. The decision depends on seeded pilots and the
-    // table's full cost only, never on which tables earlier renders left in
-    // the cache, nor on the ROI.
-    for (TableRequest& req : requests) {
+/// The kinetics chooser, per population of layer l: the exact engine's
+/// chain, the early-stopped chain where no table can serve, else a table
+/// request (built or refused by build_tables). Refuses exposures past
+/// kMaxMeanPhotonsPerGrain. Its reasons go to plan.reason.
+Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableRequests& tables)
+{
+    const Layer& layer = c.stock.layers[l];
+    double n_mean_area = 0.0;
+    for (size_t p = 0; p < plan.populations.size(); ++p)
+        n_mean_area += layer.populations[p].grains_per_um2 * plan.populations[p].grains.mean_area_um2();
+    const RegionValues values
+        = region_values(plan.exposure, input_region(c.input, c.frame, c.roi, plan.margin_um));
+    std::ostringstream why;
+    for (size_t p = 0; p < plan.populations.size(); ++p) {
+        PopulationPlan& pp    = plan.populations[p];
+        const Population& pop = layer.populations[p];
+        const double mean_grain_photons = pp.photons_per_value_um2 * pp.grains.mean_area_um2();
+        if (mean_grain_photons * values.max > kMaxMeanPhotonsPerGrain)
+            return Status::errorf(
+                "input pixel (", values.max_x, ", ", values.max_y, ") gives layer '", layer.name,
+                "' an exposure of ", format_g(values.max * c.lxs_per_value),
+                " lxs: ", format_g(mean_grain_photons * values.max),
+                " absorbed photons per mean grain (population ", p, "), above the limit of ",
+                format_g(kMaxMeanPhotonsPerGrain),
+                " (README, Limits and guarantees): lower exposure= or clamp the input");
+        if (c.exact) {
+            pp.kinetics = KineticsMethod::chain;
+            continue;
+        }
+        KineticsMethod want = c.settings.kinetics ? *c.settings.kinetics : KineticsMethod::table;
+        // The curve is built from the table: both ask for one.
+        if (want == KineticsMethod::curve)
+            want = KineticsMethod::table;
+        if (want == KineticsMethod::table && pop.rate_area_exponent != 0.0) {
+            want = KineticsMethod::early_stop;
+            why << "population " << p
+                << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
+                   "so no table: the chain runs until each outcome is decided; ";
+        }
+        if (want == KineticsMethod::table && values.max <= 0.0
+            && c.settings.scale != ScaleMethod::pixel) {
+            want = KineticsMethod::early_stop;
+            why << "population " << p << ": no light reaches it: fog only; ";
+        }
+        pp.kinetics = want;
+        if (want == KineticsMethod::table)
+            request_table(c, l, p, pp, n_mean_area, values.max, tables);
+    }
+    plan.reason = why.str();
+    return {};
+}
+
+/// Builds the requested tables. A table is built only when it costs fewer
+/// chain steps (events and photon arrivals) than the frame's grains would
+/// spend in the early-stopped chain, which decides most grains within a
+/// few steps, and in the per-grain work the table saves
+/// (kTableSavedStepsPerGrain): otherwise that chain runs, with the exact
+/// engine's results and no error of its own. The decision depends on
+/// seeded pilots and the table's full cost only, never on which tables
+/// earlier renders left in the cache, nor on the ROI.
+Status build_tables(const PlanContext& c, TableRequests& tables)
+{
+    for (TableRequest& req : tables.requests) {
         const auto t0 = std::chrono::steady_clock::now();
         // kinetics=table asked for explicitly: built whatever it costs.
         // Otherwise only when predicted to cost less than the chains it
         // replaces, and stopped (deterministically) if it costs more than
         // twice that after all.
-        const bool pays = forced_table
+        const bool pays = c.forced_table
                           || DevelopTable::predicted_steps(req.options, req.rates,
-                                                           scene.shutter_s, development)
+                                                           c.scene.shutter_s, c.development)
                                  <= req.grain_steps;
         if (pays) {
-            if (!forced_table)
+            if (!c.forced_table)
                 req.options.step_budget
                     = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
-            req.table = shared_develop_table(req.rates, scene.shutter_s, development, req.options);
+            req.table
+                = shared_develop_table(req.rates, c.scene.shutter_s, c.development, req.options);
         }
         // Setup time: the pilot, and the build when there is one.
-        req.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (cancelled())
+        req.seconds = seconds_since(t0);
+        if (c.cancelled())
             return Status::error("render cancelled");
     }
-    std::vector<bool> charged(requests.size(), false);
-    std::vector<std::shared_ptr<const DevelopCurve>> curves(requests.size());
-    // Per layer, the tables' and curves' density error bounds over the
-    // exposures a table covers (up to where a mean-sized grain's mean
-    // photon count is the table's largest count, and 16 stops below): what
-    // the raster's budget is sized from. The error estimate is over the
-    // region's exposures (for --stats); this bound depends on neither the
-    // region nor its pixels, so the raster's rows are the same for every
-    // ROI.
+    return {};
+}
+
+/// Gives each population that asked for a table its table (or the
+/// early-stopped chain where the table was refused), and the fast
+/// per-grain kernel's curve where it runs; adds their error bounds to the
+/// layers' error estimates. Returns, per layer, the tables' and curves'
+/// density error bounds over the exposures a table covers (up to 16x (4
+/// stops) past where a mean-sized grain's mean photon count is the
+/// table's largest, and 16 stops below): what the raster's budget is
+/// sized from. The error estimate is over the region's exposures (for
+/// --stats); the bound depends on neither the region nor its pixels, so
+/// the raster's rows are the same for every ROI.
+std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tables,
+                                  std::vector<LayerPlan>& out)
+{
     std::vector<double> kinetics_bound(out.size(), 0.0);
-    for (const Need& need : needs) {
+    std::vector<bool> charged(tables.requests.size(), false);
+    std::vector<std::shared_ptr<const DevelopCurve>> curves(tables.requests.size());
+    for (const TableNeed& need : tables.needs) {
         LayerPlan& plan        = out[need.layer];
         PopulationPlan& pp     = plan.populations[need.population];
-        const TableRequest& rq = requests[need.request];
+        const TableRequest& rq = tables.requests[need.request];
         if (!charged[need.request]) {  // a shared table's time is charged once
             plan.setup_seconds += rq.seconds;
             charged[need.request] = true;
@@ -628,14 +735,12 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             continue;
         }
         pp.table = rq.table;
-        const Population& pop = stock.layers[need.layer].populations[need.population];
-        // The frame's bound (what the raster's rows are sized from) over
-        // every exposure the table serves, to 16x (4 stops) past where a
-        // mean-sized grain's mean count is the table's largest; the
-        // region's estimate (--stats) is over a part of that range, so
-        // capped by it: both take the largest of a grid of exposures, and
-        // a grid point of the region's may land nearer the peak by ~0.1%,
-        // which made error_estimate exceed the tolerance it was sized for.
+        const Population& pop = c.stock.layers[need.layer].populations[need.population];
+        // The region's estimate (--stats) is over a part of the bound's
+        // range, so capped by it: both take the largest of a grid of
+        // exposures, and a grid point of the region's may land nearer the
+        // peak by ~0.1%, which made error_estimate exceed the tolerance it
+        // was sized for.
         const double bound = table_density_error(
             pop, *pp.table,
             16.0 * static_cast<double>(pp.table->max_photons()) / pp.grains.mean_area_um2());
@@ -645,22 +750,21 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         // The fast per-grain kernel (P(develop | mean photons), one uniform
         // per grain) wherever a table is built, unless the table itself
         // was asked for.
-        if ((!settings.kinetics || *settings.kinetics == KineticsMethod::curve)
-            && settings.grains != GrainMethod::exact) {
+        if ((!c.settings.kinetics || *c.settings.kinetics == KineticsMethod::curve)
+            && c.settings.grains != GrainMethod::exact) {
             if (!curves[need.request])
                 curves[need.request] = std::make_shared<const DevelopCurve>(*pp.table);
             pp.kinetics = KineticsMethod::curve;
             pp.curve    = curves[need.request];
             pp.fast     = std::make_shared<const FastGrains>(pp.grains);
-            // Exposure: integrated over the disc, as the population's
-            // plan already says (from the tile's plane for grains up to an
-            // input pixel in radius, grain_kernel.h; the input image's
-            // integral for larger ones, 0.3-1.4 us each). Sampling larger
-            // grains at their centre instead was measured biased by -0.10 D
-            // (-0.27 on edges) on a natural image under 1.5 um input pixels
-            // and 6 um grains (docs/performance/README.md, "Grains larger
-            // than the input pixels, measured"). engine=fast samples the
-            // centre.
+            // Exposure: integrated over the disc, as the population's plan
+            // already says (from the tile's plane for grains up to an input
+            // pixel in radius, grain_kernel.h; the input image's integral
+            // for larger ones, 0.3-1.4 us each). Sampling larger grains at
+            // their centre instead was measured biased by -0.10 D (-0.27 on
+            // edges) on a natural image under 1.5 um input pixels and 6 um
+            // grains (docs/performance/README.md, "Grains larger than the
+            // input pixels, measured"). engine=fast samples the centre.
             // A curve error e moves a patch density by at most 0.434 n E[a] e.
             const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
                                        * pp.curve->max_interpolation_error();
@@ -683,79 +787,90 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         why << "; ";
         plan.reason += why.str();
     }
+    return kinetics_bound;
+}
 
-    // grains=fast asked for without the curve: the kernel's grains with the
-    // population's own decisions (to measure the curve and the raster
-    // against exact decisions and coverage on the same grains).
-    if (settings.grains == GrainMethod::fast)
-        for (LayerPlan& plan : out)
-            for (PopulationPlan& pp : plan.populations)
-                if (!pp.fast)
-                    pp.fast = std::make_shared<const FastGrains>(pp.grains);
+/// grains=fast asked for without the curve: the kernel's grains with the
+/// population's own decisions (to measure the curve and the raster against
+/// exact decisions and coverage on the same grains).
+void choose_grains(const PlanContext& c, std::vector<LayerPlan>& out)
+{
+    if (c.settings.grains != GrainMethod::fast)
+        return;
+    for (LayerPlan& plan : out)
+        for (PopulationPlan& pp : plan.populations)
+            if (!pp.fast)
+                pp.fast = std::make_shared<const FastGrains>(pp.grains);
+}
 
-    // Dye layers (MODEL.md 8): their image is the mean of 10^-D over each
-    // pixel, sampled on rows (disc clouds: exact along each) or points
-    // (gaussian) spaced by a fraction of the smallest mean cloud radius.
-    // The tables' and curves' error bounds scale with the clouds' blocking
-    // area.
+// ---- The developed grains' image (MODEL.md 5, 8).
+
+/// Dye layers (MODEL.md 8): their image is the mean of 10^-D over each
+/// pixel, sampled on rows (disc clouds: exact along each) or points
+/// (gaussian) spaced by a fraction of the smallest mean cloud radius. The
+/// tables' and curves' error bounds scale with the clouds' blocking area.
+void choose_dye_image(const PlanContext& c, std::vector<LayerPlan>& out)
+{
     for (size_t l = 0; l < out.size(); ++l) {
-        const Layer& layer = stock.layers[l];
+        const Layer& layer = c.stock.layers[l];
         if (layer.image != LayerImage::dye)
             continue;
         LayerPlan& plan = out[l];
-        double smallest_cloud_um = 1e300;
-        for (const Population& pop : layer.populations)
-            smallest_cloud_um
-                = std::min(smallest_cloud_um, 0.5 * pop.diameter_um * layer.cloud_diameter_ratio);
-        const double per_radius = exact ? kDyeSamplesPerRadiusExact : kDyeSamplesPerRadiusFast;
+        const double smallest_cloud_um = smallest_mean_radius_um(layer) * layer.cloud_diameter_ratio;
+        const double per_radius = c.exact ? kDyeSamplesPerRadiusExact : kDyeSamplesPerRadiusFast;
         plan.dye_samples = static_cast<int>(std::clamp(
-            std::ceil(per_radius * std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um)
+            std::ceil(per_radius * std::max(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um)
                       / smallest_cloud_um),
-            exact ? 4.0 : 2.0, exact ? 64.0 : 16.0));
-        if (settings.coverage_samples > 0)  // samples=N (not for exact: validated)
-            plan.dye_samples = settings.coverage_samples;
+            c.exact ? 4.0 : 2.0, c.exact ? 64.0 : 16.0));
+        if (c.settings.coverage_samples > 0)  // samples=N (not for exact: validated)
+            plan.dye_samples = c.settings.coverage_samples;
         plan.error_estimate *= cloud_area_factor(layer);
     }
+}
 
-    // Coverage of the layers whose grains all run the fast kernel (and of
-    // every layer of the fast engine): raster where its sampling resolves
-    // the grains, else what the engine had.
-    for (size_t l = 0; l < out.size() && !exact; ++l) {
+/// The raster chooser: coverage of the layers whose grains all run the
+/// fast kernel (and of every layer of the fast engine) on a raster where
+/// its sampling resolves the grains, with rows for the tolerance the
+/// layer's tables and curves leave (kinetics_bound), and at least the
+/// raster's share; else the coverage chosen first.
+void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bound,
+                   std::vector<LayerPlan>& out)
+{
+    for (size_t l = 0; l < out.size() && !c.exact; ++l) {
         LayerPlan& plan = out[l];
         if (plan.dye_samples > 0)
             continue;
-        double smallest_radius_um = 1e300;
-        for (const Population& pop : stock.layers[l].populations)
-            smallest_radius_um = std::min(smallest_radius_um, 0.5 * pop.diameter_um);
-        // The tolerance the layer's tables and curves leave, and at least
-        // the raster's share.
-        const double budget = std::max(kRasterShare * settings.tolerance,
-                                       settings.tolerance - kinetics_bound[l]);
-        const double pitch_um = std::max(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
-        int samples = raster_samples(pitch_um, smallest_radius_um, budget, fast);
-        // The bias model evaluated as error_estimate adds it: within the
-        // budget to the last bit.
-        while (!fast && samples < 256 && raster_bias(samples, pitch_um, smallest_radius_um) > budget)
-            ++samples;
-        if (!settings.coverage && (all_curves(plan) || fast))
+        const double smallest_radius_um = smallest_mean_radius_um(c.stock.layers[l]);
+        const double budget = std::max(kRasterShare * c.settings.tolerance,
+                                       c.settings.tolerance - kinetics_bound[l]);
+        const double pitch_um = std::max(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um);
+        if (!c.settings.coverage && (all_curves(plan) || c.fast))
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
             continue;
-        plan.coverage_samples
-            = settings.coverage_samples > 0 ? settings.coverage_samples : samples;
+        plan.coverage_samples = c.settings.coverage_samples > 0
+                                    ? c.settings.coverage_samples
+                                    : raster_samples(pitch_um, smallest_radius_um, budget, c.fast);
         plan.error_estimate += raster_bias(plan.coverage_samples, pitch_um, smallest_radius_um);
     }
+}
 
-    // Scale (MODEL.md 5 at pixel scale): a layer whose grains all run the
-    // kernel is drawn from its pixel statistics where they describe it:
-    // pixel correlations that end within kMaxLag pixels (at most 1% of
-    // their sum beyond), and enough developed grains per pixel even at zero
-    // exposure (fog) for its skewed law (measured in docs/performance).
-    for (size_t l = 0; l < out.size() && !exact; ++l) {
-        LayerPlan& plan = out[l];
-        const Layer& layer = stock.layers[l];
-        const bool curves = all_curves(plan);
-        if (settings.scale == ScaleMethod::grain || (!settings.scale && !curves))
+// ---- Scale (MODEL.md 5 at pixel scale).
+
+/// The scale chooser: a layer whose grains all run the kernel is drawn
+/// from its pixel statistics where they describe it: pixel correlations
+/// that end within kMaxLag pixels (at most 1% of their sum beyond), and
+/// enough developed grains per pixel even at zero exposure (fog) for its
+/// skewed law (measured in docs/performance).
+Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
+                    std::vector<LayerPlan>& out)
+{
+    for (size_t l = 0; l < out.size() && !c.exact; ++l) {
+        LayerPlan& plan    = out[l];
+        const Layer& layer = c.stock.layers[l];
+        const bool curves  = all_curves(plan);
+        const std::optional<ScaleMethod>& asked = c.settings.scale;
+        if (asked == ScaleMethod::grain || (!asked && !curves))
             continue;
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
@@ -769,10 +884,10 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
         for (const PopulationPlan& pp : plan.populations)
             median_range_um = std::max(median_range_um,
                                        image.correlation_range_um(pp.grains.radius_at_z_um(0.0)));
-        const double pitch_um = std::min(frame.scan_pitch_x_um, frame.scan_pitch_y_um);
+        const double pitch_um = std::min(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um);
         // Cheap refusals first (auto): a median grain's image reaching past
         // the lags kept, or too few developed grains at fog.
-        if (!settings.scale && median_range_um > (kMaxLag + 1) * pitch_um)
+        if (!asked && median_range_um > (kMaxLag + 1) * pitch_um)
             continue;
         const auto t0 = std::chrono::steady_clock::now();
         std::vector<PixelPopulation> pops;
@@ -780,24 +895,22 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             pops.push_back({ &layer.populations[p], &plan.populations[p].grains,
                              plan.populations[p].photons_per_value_um2,
                              plan.populations[p].curve.get(), plan.populations[p].table.get() });
-        const double fog_grains
-            = PixelModel::compute(pops, frame.scan_pitch_x_um, frame.scan_pitch_y_um, 0.0, image)
-                  .developed_per_pixel;
-        if (!settings.scale && fog_grains < kMinDevelopedPerPixel)
+        const double fog_grains = PixelModel::compute(pops, c.frame.scan_pitch_x_um,
+                                                      c.frame.scan_pitch_y_um, 0.0, image)
+                                      .developed_per_pixel;
+        if (!asked && fog_grains < kMinDevelopedPerPixel)
             continue;
         // An inhibited layer (MODEL.md 10): its statistics over the log
         // factor too, up to the stock's bound on it.
-        const double max_log_factor
-            = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
-        auto model = shared_pixel_model(pops, frame.scan_pitch_x_um, frame.scan_pitch_y_um,
-                                        layer, image, max_log_factor, settings.nthreads,
-                                        stock.max_density);
-        plan.setup_seconds
-            += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (cancelled())
+        const double max_log_factor = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
+        auto model = shared_pixel_model(pops, c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um,
+                                        layer, image, max_log_factor, c.settings.nthreads,
+                                        c.stock.max_density);
+        plan.setup_seconds += seconds_since(t0);
+        if (c.cancelled())
             return Status::error("render cancelled");
         if (model->lags() < 0) {
-            if (!settings.scale)
+            if (!asked)
                 continue;
             return Status::errorf("scale=pixel: layer '", layer.name,
                                   "': its pixels' correlations reach beyond ", kMaxLag,
@@ -806,7 +919,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
                                   "for ", format_g(pitch_um), " um pixels): use scale=grain");
         }
         plan.pixel_model = std::move(model);
-        plan.pixel_key   = hash_ids(grain_seed(scene), 0x9133, l);
+        plan.pixel_key   = hash_ids(grain_seed(c.scene), 0x9133, l);
         plan.dye_samples = 0;  // no per-grain image
         const PixelModel& pm = *plan.pixel_model;
         // The table's interpolation error of the mean transmittance, as
@@ -831,105 +944,167 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
             << "; ";
         plan.reason += why.str();
     }
+    return {};
+}
 
+// ---- What the plan says (--stats: path, reason).
+
+/// The path and reason of what acts before the grains: light spread,
+/// inhibition, a dye image.
+void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
+                          const InhibitionPlan& inhibition, std::ostringstream& path,
+                          std::ostringstream& why)
+{
+    const Layer& layer = c.stock.layers[l];
+    if (plan.spread) {
+        path << "spread=fft ";
+        why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
+            << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
+            << " " << halation_kernel_name(layer.halation_kernel) << " radius "
+            << format_g(layer.halation_radius_um)
+            << " um) over the whole frame, by its exact mean over each input pixel; ";
+    }
+    if (plan.inhibition) {
+        path << "inhibition ";
+        why << "development inhibited (MODEL.md 10: inhibitor diffusion "
+            << format_g(c.stock.inhibitor_diffusion_um)
+            << " um; expected densities from the expected curves, error of the log factor <= "
+            << format_g(inhibition.error) << "); ";
+    }
+    if (layer.image == LayerImage::dye) {
+        // MODEL.md 8: per grain, the mean of 10^-D over each pixel; at
+        // pixel scale, the clouds' blocking area and overlap.
+        path << "image=dye";
+        why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
+            << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
+            << format_g(layer.cloud_density) << "): ";
+        if (plan.dye_samples > 0) {
+            path << ":" << plan.dye_samples;
+            why << "10^-D "
+                << (layer.cloud_profile == CloudProfile::disc ? "exact along " : "sampled at ")
+                << plan.dye_samples
+                << (layer.cloud_profile == CloudProfile::disc
+                        ? " rows"
+                        : "x" + std::to_string(plan.dye_samples) + " points")
+                << " per pixel (per-pixel density error measured in core "
+                   "Dye.SamplingConverges, not in the error estimate); ";
+        } else {
+            why << "their blocking area and overlap in the pixel statistics; ";
+        }
+        path << " ";
+    }
+}
+
+/// The path and reason of the per-grain pipeline: kinetics, grains,
+/// exposure and coverage.
+void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostringstream& path,
+                         std::ostringstream& why)
+{
+    path << "kinetics=";
+    for (size_t p = 0; p < plan.populations.size(); ++p)
+        path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
+    const ExposureMethod exposure = plan.populations.front().exposure;
+    const bool mixed = std::any_of(plan.populations.begin(), plan.populations.end(),
+                                   [&](const PopulationPlan& pp) { return pp.exposure != exposure; });
+    if (plan.populations.front().fast)
+        path << " grains=fast";
+    path << " exposure=";
+    if (mixed)  // per population, as kinetics
+        for (size_t p = 0; p < plan.populations.size(); ++p)
+            path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
+    else
+        path << exposure_method_name(exposure);
+    if (plan.dye_samples == 0)  // a dye layer's image is above, not a coverage
+        path << " coverage=" << coverage_method_name(plan.coverage);
+    if (plan.dye_samples == 0
+        && (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster))
+        path << ":" << plan.coverage_samples;
+    if (c.exact) {
+        why << "the reference engine: every photon, each chain until its grain is decided, "
+            << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
+        return;
+    }
+    if (exposure == ExposureMethod::centre || mixed)
+        why << "exposure sampled at grain centres"
+            << (mixed ? " for the populations above marked so" : "")
+            << " (error at image edges, measured in docs/); ";
+    if (exposure == ExposureMethod::disc
+        && std::any_of(plan.populations.begin(), plan.populations.end(),
+                       [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
+        why << "exposure integrated over each grain's disc (the kernel's: segment "
+               "areas tabulated to "
+            << format_g(SegmentTable::shared().max_error()) << " of r^2, float exposure values); ";
+    if (plan.coverage == CoverageMethod::scanline)
+        why << "coverage on " << plan.coverage_samples
+            << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "
+               "per pixel); ";
+    if (plan.coverage == CoverageMethod::raster)
+        why << "coverage at 64x" << plan.coverage_samples
+            << " points per pixel (unbiased in the mean transmittance, noisy per pixel: "
+               "its bias of the mean of pixel densities, modelled from docs/performance, "
+               "is in the error estimate); ";
+    why << "error estimate = patch-mean density bias bound at 2 sigma from the tables, "
+           "plus the raster's modelled bias";
+}
+
+/// Every layer's path and the whole of its reason.
+void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vector<LayerPlan>& out)
+{
     for (size_t l = 0; l < out.size(); ++l) {
         LayerPlan& plan = out[l];
         std::ostringstream path, why;
-        if (plan.spread) {
-            const Layer& layer = stock.layers[l];
-            path << "spread=fft ";
-            why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
-                << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
-                << " " << halation_kernel_name(layer.halation_kernel) << " radius "
-                << format_g(layer.halation_radius_um)
-                << " um) over the whole frame, by its exact mean over each input pixel; ";
-        }
-        if (plan.inhibition) {
-            path << "inhibition ";
-            why << "development inhibited (MODEL.md 10: inhibitor diffusion "
-                << format_g(stock.inhibitor_diffusion_um)
-                << " um; expected densities from the expected curves, error of the log factor <= "
-                << format_g(inhibition.error) << "); ";
-        }
-        const Layer& layer = stock.layers[l];
-        if (layer.image == LayerImage::dye) {
-            // MODEL.md 8: per grain, the mean of 10^-D over each pixel; at
-            // pixel scale, the clouds' blocking area and overlap.
-            path << "image=dye";
-            why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
-                << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
-                << format_g(layer.cloud_density) << "): ";
-            if (plan.dye_samples > 0) {
-                path << ":" << plan.dye_samples;
-                why << "10^-D "
-                    << (layer.cloud_profile == CloudProfile::disc ? "exact along " : "sampled at ")
-                    << plan.dye_samples
-                    << (layer.cloud_profile == CloudProfile::disc
-                            ? " rows"
-                            : "x" + std::to_string(plan.dye_samples) + " points")
-                    << " per pixel (per-pixel density error measured in core "
-                       "Dye.SamplingConverges, not in the error estimate); ";
-            } else {
-                why << "their blocking area and overlap in the pixel statistics; ";
-            }
-            path << " ";
-        }
+        describe_layer_image(c, l, plan, inhibition, path, why);
         if (plan.pixel_model) {
             path << "scale=pixel kinetics=curve exposure=box";
-            plan.path = path.str();
+            plan.path   = path.str();
             plan.reason = why.str() + plan.reason;
             continue;
         }
-        path << "kinetics=";
-        for (size_t p = 0; p < plan.populations.size(); ++p)
-            path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
-        const ExposureMethod exposure = plan.populations.front().exposure;
-        const bool mixed = std::any_of(
-            plan.populations.begin(), plan.populations.end(),
-            [&](const PopulationPlan& pp) { return pp.exposure != exposure; });
-        if (plan.populations.front().fast)
-            path << " grains=fast";
-        path << " exposure=";
-        if (mixed)  // per population, as kinetics
-            for (size_t p = 0; p < plan.populations.size(); ++p)
-                path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
-        else
-            path << exposure_method_name(exposure);
-        if (plan.dye_samples == 0)  // a dye layer's image is above, not a coverage
-            path << " coverage=" << coverage_method_name(plan.coverage);
-        if (plan.dye_samples == 0
-            && (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster))
-            path << ":" << plan.coverage_samples;
+        describe_grain_path(c, plan, path, why);
         plan.path = path.str();
-        if (exact) {
-            why << "the reference engine: every photon, each chain until its grain is decided, "
-                << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
-        } else {
-            if (exposure == ExposureMethod::centre || mixed)
-                why << "exposure sampled at grain centres"
-                    << (mixed ? " for the populations above marked so" : "")
-                    << " (error at image edges, measured in docs/); ";
-            if (exposure == ExposureMethod::disc
-                && std::any_of(plan.populations.begin(), plan.populations.end(),
-                               [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
-                why << "exposure integrated over each grain's disc (the kernel's: segment "
-                       "areas tabulated to "
-                    << format_g(SegmentTable::shared().max_error())
-                    << " of r^2, float exposure values); ";
-            if (plan.coverage == CoverageMethod::scanline)
-                why << "coverage on " << plan.coverage_samples
-                    << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "
-                       "per pixel); ";
-            if (plan.coverage == CoverageMethod::raster)
-                why << "coverage at 64x" << plan.coverage_samples
-                    << " points per pixel (unbiased in the mean transmittance, noisy per pixel: "
-                       "its bias of the mean of pixel densities, modelled from docs/performance, "
-                       "is in the error estimate); ";
-            why << "error estimate = patch-mean density bias bound at 2 sigma from the tables, "
-                   "plus the raster's modelled bias";
-        }
         plan.reason += why.str();
     }
+}
+
+}  // namespace
+
+Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                   const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
+                   std::vector<LayerPlan>& out, const std::atomic<bool>* cancel)
+{
+    out.clear();
+    const PlanContext c(stock, scene, input, frame, roi, settings, cancel);
+
+    // The exposure every later choice reads (MODEL.md 9, 10).
+    const SpreadLight spread = spread_light(c);
+    if (c.cancelled())
+        return Status::error("render cancelled");
+    const std::vector<LayerExposure> exposures = layer_exposures(c, spread);
+    InhibitionPlan inhibition;
+    double inhibition_seconds = 0.0;
+    if (Status s = plan_inhibitors(c, exposures, inhibition, inhibition_seconds); !s)
+        return s;
+
+    // Grains, exposure, first coverage and kinetics, layer by layer (tables
+    // requested in that order: their streams are keyed by it).
+    TableRequests tables;
+    for (size_t l = 0; l < stock.layers.size(); ++l) {
+        LayerPlan plan = start_layer(
+            c, l, exposures[l], spread.seconds[l] + inhibition_seconds / stock.layers.size(),
+            spread.values[l], inhibition.log_factor.empty() ? nullptr : inhibition.log_factor[l]);
+        if (Status s = choose_kinetics(c, l, plan, tables); !s)
+            return s;
+        out.push_back(std::move(plan));
+    }
+    if (Status s = build_tables(c, tables); !s)
+        return s;
+    const std::vector<double> kinetics_bound = attach_tables(c, tables, out);
+    choose_grains(c, out);
+    choose_dye_image(c, out);
+    choose_raster(c, kinetics_bound, out);
+    if (Status s = choose_scale(c, inhibition, out); !s)
+        return s;
+    describe(c, inhibition, out);
     return {};
 }
 
