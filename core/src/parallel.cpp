@@ -1,4 +1,6 @@
-// The core's one parallel loop.
+// The core's one parallel loop, on oneTBB (Debian's libtbb-dev): a render
+// inside a host application that already uses oneTBB shares its workers
+// instead of starting its own.
 #include "parallel.h"
 
 #include <algorithm>
@@ -7,7 +9,11 @@
 #include <exception>
 #include <mutex>
 #include <thread>
-#include <vector>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/partitioner.h>
+#include <oneapi/tbb/task_arena.h>
 
 namespace filmgrain {
 
@@ -23,50 +29,69 @@ int64_t parallel_for(int64_t n, int nthreads, std::atomic<bool>& stop,
                      const std::function<void(int64_t)>& poll)
 {
     const int workers = parallel_workers(n, nthreads);
-    std::atomic<int64_t> next { 0 }, done { 0 };
+    std::atomic<int64_t> done { 0 };
     std::mutex mutex;
-    std::condition_variable wake;
     std::exception_ptr error;
-    int running = workers;
-    const auto work = [&](int worker) {
+    const auto item = [&](int64_t i) {
+        if (stop)
+            return;
+        // Slots of the arena below: [0, workers), the one it was entered
+        // from first.
+        const int worker = tbb::this_task_arena::current_thread_index();
         try {
-            for (int64_t i; !stop && (i = next++) < n;) {
-                try {
-                    body(worker, i);
-                    ++done;
-                } catch (const Stopped&) {
-                    stop = true;
-                }
-            }
+            body(worker, i);
+            ++done;
+        } catch (const Stopped&) {
+            stop = true;
         } catch (...) {
             std::lock_guard<std::mutex> lock(mutex);
             if (!error)
                 error = std::current_exception();
             stop = true;
         }
-        std::lock_guard<std::mutex> lock(mutex);
-        --running;
-        wake.notify_all();
     };
-    std::vector<std::thread> threads;
-    const int first = poll ? 0 : 1;  // without poll, this thread is worker 0
-    for (int w = first; w < workers; ++w)
-        threads.emplace_back(work, w);
-    if (poll) {
+    // An arena of `workers` slots, one for the thread that enters it: each
+    // item is a task of its own (simple_partitioner, grain 1), so the
+    // threads balance unequal items as they finish them. Nested loops (a
+    // plan inside a polled loop, table nodes inside a plan) get arenas of
+    // their own: a thread waiting for one runs only that loop's items.
+    tbb::task_arena arena(workers, 1);
+    const auto run = [&] {
+        arena.execute([&] {
+            tbb::parallel_for(
+                tbb::blocked_range<int64_t>(0, n, 1),
+                [&](const tbb::blocked_range<int64_t>& r) {
+                    for (int64_t i = r.begin(); i != r.end(); ++i)
+                        item(i);
+                },
+                tbb::simple_partitioner());
+        });
+    };
+    if (!poll) {
+        run();
+    } else {
+        // The calling thread polls; a thread of its own enters the arena
+        // (oneTBB has no timed wait), with the arena's other workers.
+        std::condition_variable wake;
+        bool finished = false;
+        std::thread runner([&] {
+            run();
+            std::lock_guard<std::mutex> lock(mutex);
+            finished = true;
+            wake.notify_all();
+        });
         std::unique_lock<std::mutex> lock(mutex);
-        while (running > 0) {
+        while (!finished) {
             wake.wait_for(lock, std::chrono::milliseconds(100));
-            if (running > 0) {
+            if (!finished) {
                 lock.unlock();
                 poll(done);
                 lock.lock();
             }
         }
-    } else {
-        work(0);
+        lock.unlock();
+        runner.join();
     }
-    for (auto& t : threads)
-        t.join();
     if (error)
         std::rethrow_exception(error);
     return done;
