@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "dye.h"
+#include "grain_counts.h"
 #include "inhibition.h"
 #include "light_spread.h"
 #include "parallel.h"
@@ -92,15 +93,13 @@ double early_stop_steps_per_grain(const Population& pop, const KineticsRates& ra
                                    const Development& dev, uint64_t key)
 {
     constexpr int kPilotGrains = 256;
-    const double s  = pop.diameter_log_sigma;
-    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
     uint64_t steps = 0;
     for (int i = 0; i < kPilotGrains; ++i) {
         Rng draw(hash_ids(key, static_cast<uint64_t>(i)), Stage::photons);
         const double u_dev = draw.uniform();
         const uint64_t needed = dev.n4_needed(u_dev);
         const double z     = std::clamp(normal_quantile(draw.uniform_open0()), -9.0, 9.0);
-        const double d_um  = std::exp(mu + s * z);
+        const double d_um  = diameter_at_z_um(pop, z);
         const uint64_t n   = sample_poisson(photons_per_um2 * M_PI / 4.0 * d_um * d_um, draw);
         if (needed == 0 || n < 4 || needed == std::numeric_limits<uint64_t>::max())
             continue;
@@ -122,33 +121,21 @@ double early_stop_steps_per_grain(const Population& pop, const KineticsRates& ra
 double table_density_error(const Population& pop, const DevelopTable& table,
                            double photons_per_um2_max)
 {
-    const double s  = pop.diameter_log_sigma;
-    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
-    const int zn    = s > 0.0 ? 121 : 1;
-    double worst    = 0.0;
+    double worst = 0.0;
+    // Weights by photon count (counts above the table run the chain).
+    std::vector<double> w(static_cast<size_t>(table.max_photons()) + 1);
     for (int k = 0; k <= 32; ++k) {
         const double c = photons_per_um2_max * std::exp2(-0.5 * k);
-        // Weights by photon count (counts above the table run the chain).
-        std::vector<double> w(static_cast<size_t>(table.max_photons()) + 1, 0.0);
+        std::fill(w.begin(), w.end(), 0.0);
         double interp = 0.0;
-        for (int i = 0; i < zn; ++i) {
-            const double z   = zn > 1 ? -5.0 + 10.0 * i / (zn - 1) : 0.0;
-            const double pdf = zn > 1 ? std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * (10.0 / (zn - 1)) : 1.0;
-            const double d   = std::exp(mu + s * z);
-            const double a   = M_PI / 4.0 * d * d;
-            const double lam = c * a;
-            const double sp  = 8.0 * std::sqrt(lam) + 8.0;
-            const uint64_t n0 = static_cast<uint64_t>(std::max(0.0, lam - sp));
-            const uint64_t n1 = std::min<uint64_t>(table.max_photons(),
-                                                   static_cast<uint64_t>(lam + sp));
-            if (n0 > n1)
-                continue;
-            for_each_poisson_term(lam, n0, n1, [&](uint64_t n, double p) {
-                w[static_cast<size_t>(n)] += pdf * a * p;
+        for_each_size_and_count(
+            pop, c,
+            [&](size_t, double weight, double a, uint64_t n, double p) {
+                w[static_cast<size_t>(n)] += weight * a * p;
                 if (!table.is_node(n))
-                    interp += pdf * a * p * table.max_interpolation_error();
-            });
-        }
+                    interp += weight * a * p * table.max_interpolation_error();
+            },
+            table.max_photons());
         double var = 0.0;
         for (size_t n = 0; n < w.size(); ++n)
             if (w[n] > 0.0) {
@@ -567,8 +554,7 @@ void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPla
     // The photon count of a grain short of the largest ones at the table's
     // top value, plus 6 Poisson sigmas; brighter grains run the
     // early-stopped chain (quickly decided: they develop).
-    const double s   = pop.diameter_log_sigma;
-    const double d_q = std::exp(std::log(pop.diameter_um) - 0.5 * s * s + s * kTableAreaQuantileZ);
+    const double d_q = diameter_at_z_um(pop, kTableAreaQuantileZ);
     const double lam = pp.photons_per_value_um2 * kTableTopValue * M_PI / 4.0 * d_q * d_q;
     const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
     // Budget: a node error e moves a patch density by at most
@@ -828,9 +814,9 @@ void choose_dye_image(const PlanContext& c, std::vector<LayerPlan>& out)
     }
 }
 
-/// The raster chooser: coverage of the layers whose grains all run the
-/// fast kernel (and of every layer of the fast engine) on a raster where
-/// its sampling resolves the grains, with rows for the tolerance the
+/// The raster chooser: coverage of the per-grain layers whose grains all
+/// run the fast kernel (and of every layer of the fast engine) on a raster
+/// where its sampling resolves the grains, with rows for the tolerance the
 /// layer's tables and curves leave (kinetics_bound), and at least the
 /// raster's share; else the coverage chosen first.
 void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bound,
@@ -838,7 +824,7 @@ void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bou
 {
     for (size_t l = 0; l < out.size() && !c.exact; ++l) {
         LayerPlan& plan = out[l];
-        if (plan.dye_samples > 0)
+        if (plan.dye_samples > 0 || plan.pixel_model)  // no coverage to choose
             continue;
         const double smallest_radius_um = smallest_mean_radius_um(c.stock.layers[l]);
         const double budget = std::max(kRasterShare * c.settings.tolerance,
@@ -1101,9 +1087,11 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     const std::vector<double> kinetics_bound = attach_tables(c, tables, out);
     choose_grains(c, out);
     choose_dye_image(c, out);
-    choose_raster(c, kinetics_bound, out);
+    // The pixel scale first: a layer drawn from its pixel statistics has
+    // no coverage, and its error estimate no raster bias.
     if (Status s = choose_scale(c, inhibition, out); !s)
         return s;
+    choose_raster(c, kinetics_bound, out);
     describe(c, inhibition, out);
     return {};
 }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "exposure.h"
+#include "grain_counts.h"
 #include "rng.h"
 
 namespace filmgrain {
@@ -51,42 +52,23 @@ DevelopmentMoments expected_development(const Population& pop, double exposure_l
                                         DevelopGivenPhotons& develop_given_photons)
 {
     // Weights w_N of each photon count in the three moments, accumulated
-    // over the z quadrature, so that each P(develop | N) is used (and its
-    // Monte Carlo error counted) once.
-    const double s  = pop.diameter_log_sigma;
-    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
+    // over the size nodes (grain_counts.h), so that each P(develop | N) is
+    // used (and its Monte Carlo error counted) once.
     const double photons_per_um2
         = pop.quantum_efficiency * kPhotonsPerUm2PerLxs * exposure_lxs;
-    const int nodes = s > 0.0 ? 1801 : 1;
-    const double dz = 18.0 / (nodes - 1 > 0 ? nodes - 1 : 1);
     std::map<uint64_t, std::array<double, 3>> weights;
     DevelopmentMoments m;
-    for (int k = 0; k < nodes; ++k) {
-        const double z      = nodes > 1 ? -9.0 + k * dz : 0.0;
-        const double pdf_dz = nodes > 1 ? std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * dz
-                                              * ((k == 0 || k == nodes - 1) ? 0.5 : 1.0)
-                                        : 1.0;
-        const double d      = std::exp(mu + s * z);
-        const double a      = M_PI / 4.0 * d * d;
-        const double lambda = photons_per_um2 * a;
-        m.mean_photons += pdf_dz * lambda;
-        // Poisson pmf over lambda +- 12 sigma (the rest is below 1e-30).
-        const double spread = 12.0 * std::sqrt(lambda) + 12.0;
-        const uint64_t n0 = static_cast<uint64_t>(std::max(0.0, std::floor(lambda - spread)));
-        const uint64_t n1 = static_cast<uint64_t>(std::ceil(lambda + spread));
-        for (uint64_t n = n0; n <= n1; ++n) {
-            const double log_p = lambda > 0.0
-                                     ? n * std::log(lambda) - lambda - std::lgamma(n + 1.0)
-                                     : (n == 0 ? 0.0 : -INFINITY);
-            const double w = pdf_dz * std::exp(log_p);
-            if (w < 1e-300)
-                continue;
-            auto& acc = weights[n];
-            acc[0] += w;
-            acc[1] += w * a;
-            acc[2] += w * a * a;
-        }
-    }
+    for_each_size_and_count(pop, photons_per_um2,
+                            [&](size_t, double weight, double a, uint64_t n, double p) {
+        const double w = weight * p;
+        m.mean_photons += w * static_cast<double>(n);
+        if (w < 1e-300)
+            return;
+        auto& acc = weights[n];
+        acc[0] += w;
+        acc[1] += w * a;
+        acc[2] += w * a * a;
+    });
     // Counts of negligible weight are not simulated: they are dropped, the
     // lightest first, while their total share of every moment stays below
     // 1e-7. Since 0 <= P <= 1 the bias this causes is at most that share,

@@ -47,10 +47,10 @@ private:
 };
 
 /// Moments of development over one population under uniform exposure
-/// (MODEL.md 2-5), integrated over the lognormal diameter (trapezoid rule in
-/// the normal score z on [-9, 9]) and over N ~ Poisson(quantum_efficiency *
-/// 4.09e3 * H * a). Only for rate_area_exponent = 0 (P(develop | N) then
-/// does not depend on a).
+/// (MODEL.md 2-5), over the lognormal diameter and N ~
+/// Poisson(quantum_efficiency * 4.09e3 * H * a) as grain_counts.h's
+/// quadrature takes them. Only for rate_area_exponent = 0 (P(develop | N)
+/// then does not depend on a).
 struct DevelopmentMoments {
     Estimate develop_fraction;   ///< E[P]
     Estimate area_developed_um2; ///< E[a P]

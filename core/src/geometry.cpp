@@ -62,7 +62,7 @@ PopulationGrains::PopulationGrains(const Population& pop, uint64_t seed, uint32_
 {
     const double s   = pop.diameter_log_sigma;
     m_log_sigma      = s;
-    m_log_median_um  = std::log(pop.diameter_um) - 0.5 * s * s;
+    m_log_median_um  = log_median_diameter_um(pop);
     m_mean_area_um2  = M_PI / 4.0 * pop.diameter_um * pop.diameter_um * std::exp(s * s);
     m_key            = hash_ids(seed, layer_index, population_index);
     const double lam = pop.grains_per_um2;

@@ -56,6 +56,19 @@ struct Grain {
     uint64_t id      = 0;
 };
 
+/// MODEL.md 1: ln d of a population's grains is Normal(ln diameter_um -
+/// s^2/2, s^2) (mean diameter diameter_um): its mean, and the diameter at
+/// normal score z.
+inline double log_median_diameter_um(const Population& pop)
+{
+    const double s = pop.diameter_log_sigma;
+    return std::log(pop.diameter_um) - 0.5 * s * s;
+}
+inline double diameter_at_z_um(const Population& pop, double z)
+{
+    return std::exp(log_median_diameter_um(pop) + pop.diameter_log_sigma * z);
+}
+
 /// The grain process of one population, generated procedurally per film
 /// cell. A population's disc diameters are lognormal: ln d ~ Normal(ln
 /// diameter_um - s^2/2, s^2). To find every grain that may touch a region

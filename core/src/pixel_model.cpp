@@ -15,9 +15,6 @@ namespace filmgrain {
 
 namespace {
 
-/// size_quadrature's range and nodes (145: step 1/8).
-constexpr double kSizeZ  = kSizeQuadratureZ;
-constexpr int kSizeNodes = 145;
 /// Distances h at which the covariance is integrated (Integrator's cells:
 /// [0, h_min], then geometric up to the largest image's overlap range).
 constexpr int kDistanceNodes = 512;
@@ -40,24 +37,6 @@ double pixel_develop_probability(const PixelPopulation& p, double lambda)
         return p.curve->probability(lambda);
     const double n = std::min(lambda, static_cast<double>(p.table->max_photons()));
     return p.table->probability(static_cast<uint64_t>(std::llround(n)));
-}
-
-const std::vector<SizeNode>& size_quadrature(const Population& population)
-{
-    // Two fixed rules, made once (the expected curves ask for them at every
-    // exposure they evaluate).
-    static const std::vector<SizeNode> single { SizeNode { 0.0, 1.0 } };
-    static const std::vector<SizeNode> trapezoid = [] {
-        std::vector<SizeNode> nodes(kSizeNodes);
-        const double dz = 2.0 * kSizeZ / (kSizeNodes - 1);
-        for (int k = 0; k < kSizeNodes; ++k) {
-            const double z = -kSizeZ + k * dz;
-            const double w = std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) * dz;
-            nodes[static_cast<size_t>(k)] = { z, (k == 0 || k == kSizeNodes - 1) ? 0.5 * w : w };
-        }
-        return nodes;
-    }();
-    return population.diameter_log_sigma > 0.0 ? trapezoid : single;
 }
 
 double coverage_exponent(const std::vector<PixelPopulation>& populations, double v)

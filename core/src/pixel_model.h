@@ -35,6 +35,7 @@
 #include "develop_curve.h"
 #include "dye.h"
 #include "geometry.h"
+#include "grain_counts.h"
 #include "filmgrain/stock.h"
 
 namespace filmgrain {
@@ -57,18 +58,8 @@ struct PixelPopulation {
 /// last node.
 double pixel_develop_probability(const PixelPopulation& p, double lambda);
 
-/// The grain sizes of a population as every pixel-scale integral takes
-/// them: trapezoid nodes z (the normal score of ln d) on [-9, 9], step
-/// 1/8, weights phi(z) dz (the mass beyond is 2e-19, left out). Not
-/// narrower: in the toe P(develop) grows like a^4, so the largest grains
-/// carry E[a P] (a cut at |z| = 4 lost 1.1% of the paper stock's net
-/// density at -6 stops). A population without spread: z = 0, weight 1.
-inline constexpr double kSizeQuadratureZ = 9.0;
-struct SizeNode {
-    double z      = 0.0;
-    double weight = 0.0;
-};
-const std::vector<SizeNode>& size_quadrature(const Population& population);
+/// size_quadrature (grain_counts.h): the size nodes of every pixel-scale
+/// integral.
 
 /// The Boolean model's coverage exponent of a layer at exposure value v
 /// (MODEL.md 5): sum over populations of grains_per_um2 E[a P(develop |

@@ -11,26 +11,11 @@
 #include "development.h"
 #include "expectations.h"
 #include "exposure.h"
+#include "grain_counts.h"
 #include "kinetics.h"
 #include "pixel_model.h"
 
 namespace filmgrain::sensitometry {
-
-namespace {
-
-/// Diameter quadrature: the normal score z of ln d on [-7, 7] (the rest
-/// holds 2.6e-12 of the grains), trapezoid rule.
-constexpr double kZMax    = 7.0;
-constexpr int kZNodes     = 561;
-
-double log_poisson(uint64_t n, double lambda)
-{
-    if (lambda <= 0.0)
-        return n == 0 ? 0.0 : -INFINITY;
-    return static_cast<double>(n) * std::log(lambda) - lambda - std::lgamma(n + 1.0);
-}
-
-}  // namespace
 
 Status develop_by_size(const Stock& stock, const Population& pop, double exposure_lxs,
                        double shutter_s, int max_samples, uint64_t seed,
@@ -40,54 +25,33 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
         return Status::errorf("rate_area_exponent = ", pop.rate_area_exponent,
                               ": the size-resolved prediction needs 0 (P(develop | N) "
                               "independent of the grain size)");
-    const double s  = pop.diameter_log_sigma;
-    const double mu = std::log(pop.diameter_um) - 0.5 * s * s;
     const double photons_per_um2 = pop.quantum_efficiency * kPhotonsPerUm2PerLxs * exposure_lxs;
-    const int nodes = s > 0.0 ? kZNodes : 1;
     out = PopulationDevelopment {};
     out.grains_per_um2 = pop.grains_per_um2;
-    std::vector<double> lambda(static_cast<size_t>(nodes)), area(static_cast<size_t>(nodes));
-    double wsum = 0.0;
-    for (int k = 0; k < nodes; ++k) {
-        const double z  = nodes > 1 ? -kZMax + 2.0 * kZMax * k / (nodes - 1) : 0.0;
-        const double w  = nodes > 1 ? std::exp(-0.5 * z * z) * ((k == 0 || k == nodes - 1) ? 0.5 : 1.0)
-                                    : 1.0;
-        const double d  = std::exp(mu + s * z);
+    // The size nodes and photon counts of grain_counts.h: one quadrature
+    // for every "sizes x counts x P(develop | N)" integral.
+    const std::vector<filmgrain::SizeNode>& sizes = size_quadrature(pop);
+    for (const filmgrain::SizeNode& q : sizes) {
         SizeNode node;
-        node.diameter_um = d;
-        node.weight      = w;
-        wsum += w;
+        node.diameter_um = diameter_at_z_um(pop, q.z);
+        node.weight      = q.weight;
         out.nodes.push_back(node);
-        area[static_cast<size_t>(k)]   = M_PI / 4.0 * d * d;
-        lambda[static_cast<size_t>(k)] = photons_per_um2 * area[static_cast<size_t>(k)];
     }
-    for (SizeNode& node : out.nodes)
-        node.weight /= wsum;
+    const auto for_each_term = [&](auto&& f) { for_each_size_and_count(pop, photons_per_um2, f); };
 
     // Importance of each photon count N: its share of E[a P] and of
     // E[a^2 P] (what the mean and the variance integrals weigh).
     std::map<uint64_t, std::array<double, 2>> importance;
-    const auto for_each_count = [&](size_t k, auto&& f) {
-        const double l      = lambda[k];
-        const double spread = 12.0 * std::sqrt(l) + 12.0;
-        const uint64_t n0   = static_cast<uint64_t>(std::max(0.0, std::floor(l - spread)));
-        const uint64_t n1   = static_cast<uint64_t>(std::ceil(l + spread));
-        for (uint64_t n = n0; n <= n1; ++n) {
-            const double p = std::exp(log_poisson(n, l));
-            if (p > 1e-300)
-                f(n, p);
-        }
-    };
+    for_each_term([&](size_t, double w, double a, uint64_t n, double p) {
+        auto& imp = importance[n];
+        imp[0] += w * a * p;
+        imp[1] += w * a * a * p;
+    });
     double total[2] = { 0.0, 0.0 };
-    for (size_t k = 0; k < out.nodes.size(); ++k) {
-        const double w = out.nodes[k].weight, a = area[k];
-        for_each_count(k, [&](uint64_t n, double p) {
-            auto& imp = importance[n];
-            imp[0] += w * a * p;
-            imp[1] += w * a * a * p;
-        });
-        total[0] += w * a;
-        total[1] += w * a * a;
+    for (const SizeNode& node : out.nodes) {
+        const double a = M_PI / 4.0 * node.diameter_um * node.diameter_um;
+        total[0] += node.weight * a;
+        total[1] += node.weight * a * a;
     }
     // Drop the lightest counts while their share of both stays below 1e-7;
     // a dropped count borrows P(develop | N) from the nearest kept one
@@ -125,17 +89,18 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
 
     double var_area = 0.0;
     std::map<uint64_t, double> area_weight;  // d E[aP] / d P(N), for the error
+    std::vector<double> p_node(out.nodes.size(), 0.0);
+    for_each_term([&](size_t k, double w, double a, uint64_t n, double p) {
+        p_node[k] += p * p_of(n).value;
+        area_weight[n] += w * a * p;
+    });
     for (size_t k = 0; k < out.nodes.size(); ++k) {
-        double pk = 0.0;
-        for_each_count(k, [&](uint64_t n, double p) {
-            pk += p * p_of(n).value;
-            area_weight[n] += out.nodes[k].weight * area[k] * p;
-        });
-        out.nodes[k].develop_probability = std::clamp(pk, 0.0, 1.0);
-        const double w = out.nodes[k].weight, a = area[k];
-        out.develop_fraction += w * out.nodes[k].develop_probability;
-        out.area_developed_um2 += w * a * out.nodes[k].develop_probability;
-        out.area2_developed_um4 += w * a * a * out.nodes[k].develop_probability;
+        SizeNode& node = out.nodes[k];
+        const double a = M_PI / 4.0 * node.diameter_um * node.diameter_um;
+        node.develop_probability = std::clamp(p_node[k], 0.0, 1.0);
+        out.develop_fraction += node.weight * node.develop_probability;
+        out.area_developed_um2 += node.weight * a * node.develop_probability;
+        out.area2_developed_um4 += node.weight * a * a * node.develop_probability;
     }
     for (const auto& [n, w] : area_weight) {
         const auto it = p_given_n.find(n);
