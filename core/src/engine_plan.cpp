@@ -111,38 +111,49 @@ double early_stop_steps_per_grain(const Population& pop, const KineticsRates& ra
     return static_cast<double>(steps) / kPilotGrains;
 }
 
-/// Bound on the bias of a patch-mean density caused by a population's
-/// table, over uniform exposures up to `photons_per_um2_max`. A patch's
-/// density is D = 0.434 n E[a P(N)] (MODEL.md 5), so a table error e(N)
-/// moves it by 0.434 n sum_N w_N e(N) with w_N = E[a 1{N_g = N}]. Node
-/// errors are independent Monte Carlo errors: their sum has standard
-/// deviation sqrt(sum w_N^2 se_N^2), counted at 2 sigma; interpolation
-/// errors may all lean one way, so they add as w_N times the bound.
-double table_density_error(const Population& pop, const DevelopTable& table,
-                           double photons_per_um2_max)
+/// A population of a layer that reads a table: its grains and its mean
+/// absorbed photons per (value x square micrometre).
+struct TableUser {
+    const Population* population;
+    double photons_per_value_um2;
+};
+
+/// Bound on the bias of a layer's patch-mean density caused by one table,
+/// read by `users` (populations of the layer), over uniform exposure
+/// values from `value_max` down 16 stops. A patch's density is
+/// D = 0.434 sum_pop n E[a P(N)] (MODEL.md 5), so a table error e(N) moves
+/// it by 0.434 sum_N W_N e(N), with W_N = sum_pop n E[a 1{N_g = N}] at the
+/// same exposure value: the populations read the same nodes. Node errors
+/// are independent Monte Carlo errors: their sum has standard deviation
+/// sqrt(sum W_N^2 se_N^2), counted at 2 sigma; interpolation errors may all
+/// lean one way, so they add as W_N times the bound. Counts above the
+/// table run the chain.
+double table_density_error(const std::vector<TableUser>& users, const DevelopTable& table,
+                           double value_max)
 {
     double worst = 0.0;
-    // Weights by photon count (counts above the table run the chain).
     std::vector<double> w(static_cast<size_t>(table.max_photons()) + 1);
     for (int k = 0; k <= 32; ++k) {
-        const double c = photons_per_um2_max * std::exp2(-0.5 * k);
+        const double v = value_max * std::exp2(-0.5 * k);
         std::fill(w.begin(), w.end(), 0.0);
         double interp = 0.0;
-        for_each_size_and_count(
-            pop, c,
-            [&](size_t, double weight, double a, uint64_t n, double p) {
-                w[static_cast<size_t>(n)] += weight * a * p;
-                if (!table.is_node(n))
-                    interp += weight * a * p * table.max_interpolation_error();
-            },
-            table.max_photons());
+        for (const TableUser& u : users)
+            for_each_size_and_count(
+                *u.population, u.photons_per_value_um2 * v,
+                [&](size_t, double weight, double a, uint64_t n, double p) {
+                    const double x = u.population->grains_per_um2 * weight * a * p;
+                    w[static_cast<size_t>(n)] += x;
+                    if (!table.is_node(n))
+                        interp += x * table.max_interpolation_error();
+                },
+                table.max_photons());
         double var = 0.0;
         for (size_t n = 0; n < w.size(); ++n)
             if (w[n] > 0.0) {
                 const double se = table.standard_error(n);
                 var += w[n] * w[n] * se * se;
             }
-        worst = std::max(worst, kLog10E * pop.grains_per_um2 * (2.0 * std::sqrt(var) + interp));
+        worst = std::max(worst, kLog10E * (2.0 * std::sqrt(var) + interp));
     }
     return worst;
 }
@@ -520,11 +531,11 @@ struct TableRequest {
     double grain_steps = 0.0;
 };
 /// A population that asked for a table: which request serves it, the
-/// largest photons per square micrometre its region gives, and whether its
-/// brightest grains pass the table's photon cap.
+/// largest exposure value of its layer's region, and whether its brightest
+/// grains pass the table's photon cap.
 struct TableNeed {
     size_t layer, population, request;
-    double photons_per_um2_max;
+    double value_max;
     bool capped;
 };
 struct TableRequests {
@@ -594,7 +605,7 @@ void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPla
         o.target_standard_error = std::min(o.target_standard_error, target);
         requests[r].grain_steps += steps;
     }
-    tables.needs.push_back({ l, p, r, pp.photons_per_value_um2 * v_max, n_need > kTablePhotonCap });
+    tables.needs.push_back({ l, p, r, v_max, n_need > kTablePhotonCap });
 }
 
 /// The kinetics chooser, per population of layer l: the exact engine's
@@ -688,18 +699,26 @@ Status build_tables(const PlanContext& c, TableRequests& tables)
 /// early-stopped chain where the table was refused), and the fast
 /// per-grain kernel's curve where it runs; adds their error bounds to the
 /// layers' error estimates. Returns, per layer, the tables' and curves'
-/// density error bounds over the exposures a table covers (up to 16x (4
-/// stops) past where a mean-sized grain's mean photon count is the
-/// table's largest, and 16 stops below): what the raster's budget is
-/// sized from. The error estimate is over the region's exposures (for
-/// --stats); the bound depends on neither the region nor its pixels, so
-/// the raster's rows are the same for every ROI.
+/// density error bounds over the exposures a table covers (to 16x (4
+/// stops) past where a mean-sized grain of its least sensitive reader has
+/// the table's largest count as its mean, and 16 stops below): what the
+/// raster's budget is sized from. The error estimate is over the region's
+/// exposures (for --stats); the bound depends on neither the region nor
+/// its pixels, so the raster's rows are the same for every ROI.
 std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tables,
                                   std::vector<LayerPlan>& out)
 {
     std::vector<double> kinetics_bound(out.size(), 0.0);
     std::vector<bool> charged(tables.requests.size(), false);
     std::vector<std::shared_ptr<const DevelopCurve>> curves(tables.requests.size());
+    // The populations of each layer that read each table, and the layer's
+    // region's largest exposure value.
+    struct Readers {
+        std::vector<TableUser> users;
+        double value_max = 0.0, bound_value = 0.0;
+    };
+    std::vector<std::vector<Readers>> readers(out.size(),
+                                              std::vector<Readers>(tables.requests.size()));
     for (const TableNeed& need : tables.needs) {
         LayerPlan& plan        = out[need.layer];
         PopulationPlan& pp     = plan.populations[need.population];
@@ -722,17 +741,13 @@ std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tab
         }
         pp.table = rq.table;
         const Population& pop = c.stock.layers[need.layer].populations[need.population];
-        // The region's estimate (--stats) is over a part of the bound's
-        // range, so capped by it: both take the largest of a grid of
-        // exposures, and a grid point of the region's may land nearer the
-        // peak by ~0.1%, which made error_estimate exceed the tolerance it
-        // was sized for.
-        const double bound = table_density_error(
-            pop, *pp.table,
-            16.0 * static_cast<double>(pp.table->max_photons()) / pp.grains.mean_area_um2());
-        plan.error_estimate
-            += std::min(bound, table_density_error(pop, *pp.table, need.photons_per_um2_max));
-        kinetics_bound[need.layer] += bound;
+        Readers& r = readers[need.layer][need.request];
+        r.users.push_back({ &pop, pp.photons_per_value_um2 });
+        r.value_max = need.value_max;
+        if (pp.photons_per_value_um2 > 0.0)
+            r.bound_value = std::max(r.bound_value,
+                                     16.0 * static_cast<double>(pp.table->max_photons())
+                                         / (pp.grains.mean_area_um2() * pp.photons_per_value_um2));
         // The fast per-grain kernel (P(develop | mean photons), one uniform
         // per grain) wherever a table is built, unless the table itself
         // was asked for.
@@ -773,6 +788,22 @@ std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tab
         why << "; ";
         plan.reason += why.str();
     }
+    // Each table's bound over its readers in a layer. The region's
+    // estimate (--stats) is over a part of the bound's range, so capped by
+    // it: both take the largest of a grid of exposures, and a grid point of
+    // the region's may land nearer the peak by ~0.1%, which made
+    // error_estimate exceed the tolerance it was sized for.
+    for (size_t l = 0; l < out.size(); ++l)
+        for (size_t q = 0; q < tables.requests.size(); ++q) {
+            const Readers& r = readers[l][q];
+            if (r.users.empty())
+                continue;
+            const DevelopTable& table = *tables.requests[q].table;
+            const double bound        = table_density_error(r.users, table, r.bound_value);
+            out[l].error_estimate
+                += std::min(bound, table_density_error(r.users, table, r.value_max));
+            kinetics_bound[l] += bound;
+        }
     return kinetics_bound;
 }
 
