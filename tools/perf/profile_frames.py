@@ -10,20 +10,29 @@ at a fraction of their area:
 
   paper1x     paper, 512x389 over 6.2225 mm: 1/16 of the paper2k frame
   color/64    color-negative, a 512x389 ROI of the 4096x3112 frame
+  color/16    the same, a 1024x778 ROI (the table build a smaller share)
   fine/256    the fine-grain benchmark stock, a 256x195 ROI of 4096x3112
   exact/64    the exact engine on the color/64 ROI's 256x194 corner
 
-Each sample is charged to the stage of the outermost model function on its
-stack (so the chain runs inside the table build count as the table build,
-the inverse sines inside the coverage as coverage):
+Each sample is charged to the table build when that is anywhere on its
+stack (the chain runs inside it count as the table build), else to the
+stage of the innermost model function on its stack (so the logarithms
+inside the chain count as the chain, the disc integrals inside the fast
+kernel as exposure):
 
-  table build        DevelopTable::DevelopTable (P(develop | N), per scene)
+  table build        DevelopTable::DevelopTable and its chain sampler
+                     (sample_latent_image_by_spacings): P(develop | N)
   kinetics chain     simulate_latent_image outside the table build
-  coverage           grid_coverage / scanline_coverage
-  exposure           LayerExposure (integral of H over each disc)
-  grains             grain generation (PopulationGrains), Poisson and
-                     develop draws (sample_poisson, n4_needed, table lookups)
-  render, other      the rest of render_negative (tiles, density, copies)
+  coverage           grid_coverage / scanline_coverage / the raster
+                     (raster_coverage, its span and count loops)
+  exposure           LayerExposure (integral of H over each disc), the
+                     fast kernel's ExposurePlane and disc integrals
+  grains             grain generation (PopulationGrains, the fast kernel's
+                     FastGrains and develop_fast), Poisson and develop draws
+                     (sample_poisson, n4_needed, table and curve lookups)
+  pixel scale        the pixel model's draws (PixelModel)
+  render, other      the rest of render_negative and the tile renderer
+                     (tiles, density, copies)
   read/colour/write  OpenImageIO, OpenColorIO, OpenEXR
   start-up           the dynamic loader (ld.so relocations of the libraries)
   kernel, other      page faults, thread start, anything else
@@ -47,26 +56,34 @@ import bench_frames  # noqa: E402
 
 FRAME_MM = bench_frames.FRAME_MM
 
-# (stage, substrings of a symbol); the outermost frame that matches wins.
+# (stage, substrings of a symbol). The table build wins wherever it is on
+# the stack; otherwise the innermost frame that matches wins.
+TABLE_BUILD = ("table build", ["DevelopTable::DevelopTable", "sample_latent_image_by_spacings"])
 STAGES = [
-    ("table build", ["DevelopTable::DevelopTable"]),
+    TABLE_BUILD,
     ("kinetics chain", ["simulate_latent_image"]),
-    ("coverage", ["grid_coverage", "scanline_coverage"]),
-    ("exposure", ["LayerExposure"]),
-    ("grains", ["PopulationGrains", "sample_poisson", "n4_needed", "DevelopTable::probability",
-                "DevelopTable::interpolate", "normal_quantile"]),
+    ("coverage", ["grid_coverage", "scanline_coverage", "raster_coverage", "raster_discs",
+                  "count_points"]),
+    ("exposure", ["LayerExposure", "ExposurePlane", "PlaneIntegrals", "plane_integrals"]),
+    ("grains", ["PopulationGrains", "FastGrains", "develop_fast", "sample_poisson", "n4_needed",
+                "PoissonTable", "DevelopTable::probability", "DevelopTable::interpolate",
+                "DevelopCurve", "normal_quantile"]),
+    ("pixel scale", ["PixelModel"]),
 ]
 
 
 def classify(stack):
     """stack: [(symbol, dso)] leaf first. Returns the stage name."""
-    for frame_sym, _ in reversed(stack):  # root first: the outermost match wins
-        for stage, pats in STAGES:
+    stage, pats = TABLE_BUILD
+    if any(p in frame_sym for frame_sym, _ in stack for p in pats):
+        return stage
+    for frame_sym, _ in stack:  # leaf first: the innermost match wins
+        for stage, pats in STAGES[1:]:
             if any(p in frame_sym for p in pats):
                 return stage
     syms = " ".join(s for s, _ in stack)
     dsos = " ".join(d for _, d in stack)
-    if "render_negative" in syms:
+    if "render_negative" in syms or "TileRenderer" in syms:
         return "render, other"
     if "_dl_start" in syms or "dl_main" in syms or "_dl_relocate" in syms or "_dl_init" in syms:
         return "start-up (ld.so)"
@@ -153,6 +170,9 @@ def main(argv=None):
         ("color/64", [gh4k, "--iscolorspace", "sRGB",
                       f"--filmgrain:stock=color-negative:width_mm={FRAME_MM}"
                       ":roi=1792,1361,512,389"]),
+        ("color/16", [gh4k, "--iscolorspace", "sRGB",
+                      f"--filmgrain:stock=color-negative:width_mm={FRAME_MM}"
+                      ":roi=1536,1167,1024,778"]),
         ("fine/256", [gh4k, "--iscolorspace", "sRGB",
                       f"--filmgrain:stock={fine}:width_mm={FRAME_MM}:roi=1920,1458,256,195"]),
         ("exact/64", [gh4k, "--iscolorspace", "sRGB",
@@ -177,8 +197,10 @@ def main(argv=None):
          f"{os.path.relpath(binary, repo)} --out {os.path.relpath(os.path.abspath(args.out), repo)}`"
          f" in {total / 60:.1f} min at commit {fgperf.git_describe(repo)}; "
          f"{fgperf.machine_note()}. Linux perf, {args.freq} samples/s per thread, DWARF call "
-         "stacks; each sample is charged to the outermost model function on its stack (the "
-         "chain runs inside the table build count as the table build). Shares of CPU samples "
+         "stacks; each sample is charged to the table build where that is on its stack (the "
+         "chain runs inside it count as the table build), else to the innermost model "
+         "function on its stack (the disc integrals inside the fast kernel count as exposure). "
+         "Shares of CPU samples "
          "over all threads of one CLI run (read, render, EXR write).", "",
          "| stage | " + " | ".join(r["case"] for r in results) + " |",
          "| --- | " + " | ".join("---" for _ in results) + " |"]
@@ -205,7 +227,8 @@ def main(argv=None):
     L.append("")
     for r in results:
         L.append(f"Top self time, {r['case']}: " + ", ".join(
-            f"`{k.split('(')[0][:60]}` {v * 100:.1f}%" for k, v in r["top_self"][:8]) + ".")
+            f"`{k.replace('(anonymous namespace)::', '').split('(')[0][:60]}` {v * 100:.1f}%"
+            for k, v in r["top_self"][:8]) + ".")
         L.append("")
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "profile.md"), "w") as f:
