@@ -1,6 +1,7 @@
 // Tests of the expected characteristic curve (filmgrain/expected_curve.h)
 // against the independent expectation of expectations.h (the exact chain
-// run per photon count, a 1801-node size quadrature on |z| <= 9), and of
+// run per photon count, over grain_counts.h's sizes and counts, whose
+// quadrature grain_counts_test.cpp holds to closed-form moments), and of
 // its inverse.
 #include "filmgrain/expected_curve.h"
 

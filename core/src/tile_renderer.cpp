@@ -34,11 +34,12 @@ struct GrainOutcome {
 
 }  // namespace
 
+/// The tile renderer's state and pipeline (TileRenderer forwards to it).
 class TileRenderer::Impl {
 public:
     Impl(const Stock& stock, const SceneSettings& scene, const FrameGeometry& frame,
-                 const Roi& roi, const std::vector<LayerPlan>& layers, float* out,
-                 const std::atomic<bool>& stop)
+         const Roi& roi, const std::vector<LayerPlan>& layers, float* out,
+         const std::atomic<bool>& stop)
         : m_stock(stock)
         , m_scene(scene)
         , m_frame(frame)
