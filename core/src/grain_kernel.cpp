@@ -240,7 +240,8 @@ __attribute__((target("avx2"))) void plane_integrals_avx2(const PlaneIntegrals& 
                                                           const double* x, const double* y,
                                                           const double* r, size_t n, double* out)
 {
-    const __m256d inv_pitch = _mm256_set1_pd(k.per_pitch_um), pitch = _mm256_set1_pd(k.pitch_um);
+    const __m256d per_pitch_um_v = _mm256_set1_pd(k.per_pitch_um);
+    const __m256d pitch_um_v     = _mm256_set1_pd(k.pitch_um);
     const __m256d x0 = _mm256_set1_pd(k.x0), y0 = _mm256_set1_pd(k.y0);
     const __m256d big = _mm256_set1_pd(PlaneIntegrals::kBig), nbig = _mm256_set1_pd(-PlaneIntegrals::kBig);
     const __m256d one = _mm256_set1_pd(1.0), mone = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
@@ -253,13 +254,13 @@ __attribute__((target("avx2"))) void plane_integrals_avx2(const PlaneIntegrals& 
         const __m256d xr = _mm256_loadu_pd(x + i), yr = _mm256_loadu_pd(y + i);
         const __m256d rr = _mm256_loadu_pd(r + i);
         const __m256d gx = _mm256_min_pd(
-            _mm256_max_pd(_mm256_sub_pd(_mm256_mul_pd(xr, inv_pitch), x0), nbig), big);
+            _mm256_max_pd(_mm256_sub_pd(_mm256_mul_pd(xr, per_pitch_um_v), x0), nbig), big);
         const __m256d gy = _mm256_min_pd(
-            _mm256_max_pd(_mm256_sub_pd(_mm256_mul_pd(yr, inv_pitch), y0), nbig), big);
+            _mm256_max_pd(_mm256_sub_pd(_mm256_mul_pd(yr, per_pitch_um_v), y0), nbig), big);
         const __m256d fx = _mm256_min_pd(_mm256_max_pd(_mm256_floor_pd(gx), mone), nx);
         const __m256d fy = _mm256_min_pd(_mm256_max_pd(_mm256_floor_pd(gy), mone), ny);
         const __m256d tx = _mm256_sub_pd(gx, fx), ty = _mm256_sub_pd(gy, fy);
-        const __m256d inv_r = _mm256_div_pd(pitch, rr);
+        const __m256d inv_r = _mm256_div_pd(pitch_um_v, rr);
         const __m256d a = _mm256_min_pd(
             _mm256_max_pd(_mm256_mul_pd(_mm256_min_pd(tx, _mm256_sub_pd(one, tx)), inv_r), zero),
             one);
