@@ -2,6 +2,7 @@
 #include "dye.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -23,31 +24,96 @@ double ein(double k)
 constexpr double kFixedPoint = 4294967296.0;  // 2^32 per density unit
 constexpr double kLn10       = 2.302585092994046;
 
+/// The clouds over a stretch of a row, for MODEL.md 8's sum: a whole
+/// number of clouds, `count`; 10^-min(count c, max_density) looked up in
+/// the scratch's levels (disc_rows clears them once per call).
+class CloudCount {
+public:
+    CloudCount(const Layer& layer, double max_density, DyeScratch& scratch)
+        : m_level(scratch.level), m_density(layer.cloud_density), m_max_density(max_density)
+    {
+    }
+    /// A cloud of population `pop` enters the stretch (`step` +1) or leaves
+    /// it (-1).
+    void step(int step, uint8_t /*pop*/) { m_count += step; }
+    double transmittance()
+    {
+        while (static_cast<int>(m_level.size()) <= m_count)
+            m_level.push_back(std::exp(-kLn10 * std::min(static_cast<double>(m_level.size())
+                                                             * m_density,
+                                                         m_max_density)));
+        return m_level[static_cast<size_t>(m_count)];
+    }
+
+private:
+    std::vector<double>& m_level;  // 10^-min(k c, max) for k clouds
+    double m_density, m_max_density;
+    int m_count = 0;
+};
+
+/// The clouds over a stretch of a row when populations are coupler-limited
+/// (FilledImage): each such population counts max_dye_density if any of its
+/// clouds is there, the others cloud_density per cloud.
+class LimitedCloudCount {
+public:
+    LimitedCloudCount(const Layer& layer, double max_density, DyeScratch& /*scratch*/)
+        : m_layer(layer), m_max_density(max_density)
+    {
+    }
+    void step(int step, uint8_t pop)
+    {
+        m_count[pop] += step;
+        m_stale = true;
+    }
+    double transmittance()
+    {
+        if (m_stale) {
+            double d = 0.0;
+            for (size_t p = 0; p < m_layer.populations.size(); ++p) {
+                const double limit = m_layer.populations[p].max_dye_density;
+                if (limit > 0.0)
+                    d += m_count[p] > 0 ? limit : 0.0;
+                else
+                    d += m_count[p] * m_layer.cloud_density;
+            }
+            m_t     = std::exp(-kLn10 * std::min(d, m_max_density));
+            m_stale = false;
+        }
+        return m_t;
+    }
+
+private:
+    const Layer& m_layer;
+    double m_max_density;
+    std::array<int, 256> m_count {};  // per population (uint8_t indices)
+    double m_t   = 1.0;
+    bool m_stale = true;
+};
+
 /// Disc clouds: along each of `samples` rows per pixel row, D(x) is a
-/// whole number of clouds times cloud_density, constant between the
-/// clouds' chord ends, so 10^-D is integrated exactly along the row (a
-/// sweep over the sorted chord ends, cut at the pixel edges); only the
-/// integral across rows is sampled (the midpoint rule). Every piece a pixel
-/// sums lies between chord ends inside it or its own edges, in order: the
-/// same in every block.
-void disc_rows(const std::vector<Disc>& grains, const Layer& layer, double max_density,
-               int64_t x0, int64_t y0, int64_t x1, int64_t y1, double px_um, double py_um,
-               int samples, DyeScratch& scratch, double* transmittance)
+/// whole number of clouds times cloud_density (or, Counter
+/// LimitedCloudCount, a sum of such levels), constant between the clouds'
+/// chord ends, so 10^-D is integrated exactly along the row (a sweep over
+/// the sorted chord ends, cut at the pixel edges); only the integral across
+/// rows is sampled (the midpoint rule). Every piece a pixel sums lies
+/// between chord ends inside it or its own edges, in order: the same in
+/// every block. `population`: each grain's (read by LimitedCloudCount).
+template<typename Counter>
+void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const Layer& layer,
+               double max_density, int64_t x0, int64_t y0, int64_t x1, int64_t y1,
+               double px_um, double py_um, int samples, DyeScratch& scratch,
+               double* transmittance)
 {
     const int64_t tw = x1 - x0;
     const int64_t s  = samples;
     const double sy  = py_um / static_cast<double>(s);
     const double left = static_cast<double>(x0) * px_um, right = static_cast<double>(x1) * px_um;
+    // A chord end: where, and a code: +(1 + 2 p) where a cloud of
+    // population p enters, -(1 + 2 p) where it leaves (p = 0 without
+    // `population`: the codes +-1 of a plain count).
     std::vector<std::pair<double, int>>& ends = scratch.ends;
-    std::vector<double>& level = scratch.level;  // 10^-min(k c, max) for k clouds
-    const auto transmittance_of = [&](int k) {
-        while (static_cast<int>(level.size()) <= k)
-            level.push_back(std::exp(
-                -kLn10 * std::min(static_cast<double>(level.size()) * layer.cloud_density,
-                                  max_density)));
-        return level[static_cast<size_t>(k)];
-    };
-    level.clear();
+    const auto pop_of = [&](size_t grain) -> uint8_t { return population ? population[grain] : 0; };
+    scratch.level.clear();
     std::vector<double> sum(static_cast<size_t>(tw));
     for (int64_t row = y0; row < y1; ++row) {
         std::fill(sum.begin(), sum.end(), 0.0);
@@ -56,9 +122,10 @@ void disc_rows(const std::vector<Disc>& grains, const Layer& layer, double max_d
         for (int64_t j = 0; j < s; ++j) {
             const double y = (static_cast<double>(row * s + j) + 0.5) * sy;
             ends.clear();
-            int count = 0;  // clouds covering the block's left edge
+            Counter count(layer, max_density, scratch);  // clouds covering the block's left edge
             for (size_t m = b; m < e; ++m) {
-                const Disc& g   = grains[scratch.members[m]];
+                const size_t gi = scratch.members[m];
+                const Disc& g   = grains[gi];
                 const double rc = layer.cloud_diameter_ratio * g.r_um;
                 const double dy = y - g.y_um;
                 if (std::fabs(dy) >= rc)
@@ -67,20 +134,21 @@ void disc_rows(const std::vector<Disc>& grains, const Layer& layer, double max_d
                 const double a = g.x_um - half, c = g.x_um + half;
                 if (c <= left || a >= right)
                     continue;
+                const int tag = population ? 2 * static_cast<int>(pop_of(gi)) : 0;
                 if (a <= left)
-                    ++count;
+                    count.step(+1, pop_of(gi));
                 else
-                    ends.push_back({ a, +1 });
+                    ends.push_back({ a, +1 + tag });
                 if (c < right)
-                    ends.push_back({ c, -1 });
+                    ends.push_back({ c, -1 - tag });
             }
             std::sort(ends.begin(), ends.end());
             ends.push_back({ right, 0 });
             double x   = left;
             int64_t ix = x0;  // the pixel holding x
-            for (const auto& [at, step] : ends) {
-                // [x, at) has `count` clouds: cut it at the pixel edges.
-                const double t = transmittance_of(count);
+            for (const auto& [at, code] : ends) {
+                // [x, at) has the clouds `count` holds: cut it at the pixel edges.
+                const double t = count.transmittance();
                 while (x < at) {
                     const double edge = static_cast<double>(ix + 1) * px_um;
                     const double to   = std::min(at, edge);
@@ -92,7 +160,9 @@ void disc_rows(const std::vector<Disc>& grains, const Layer& layer, double max_d
                         break;
                 }
                 x = std::max(x, at);
-                count += step;
+                if (code != 0)
+                    count.step(code > 0 ? +1 : -1,
+                               static_cast<uint8_t>((std::abs(code) - 1) / 2));
             }
         }
         for (int64_t ix = 0; ix < tw; ++ix)
@@ -119,6 +189,35 @@ double cloud_area_factor(const Layer& layer)
     if (layer.cloud_profile == CloudProfile::disc)
         return r2 * -std::expm1(-layer.cloud_density * kLn10);
     return r2 * 0.5 * ein(layer.cloud_density * kLn10);
+}
+
+FilledImage filled_image(double cloud_diameter_ratio, const Population& pop)
+{
+    FilledImage f;
+    f.area_ratio = cloud_diameter_ratio * cloud_diameter_ratio;
+    if (pop.coupler_limited())
+        f.opacity = -std::expm1(-pop.max_dye_density * kLn10);
+    return f;
+}
+
+bool has_coupler_limit(const Layer& layer)
+{
+    return std::any_of(layer.populations.begin(), layer.populations.end(),
+                       [](const Population& p) { return p.coupler_limited(); });
+}
+
+double layer_mean_transmittance(const Layer& layer, const std::vector<double>& cover)
+{
+    double added = 0.0, filled = 1.0;
+    for (size_t p = 0; p < layer.populations.size(); ++p) {
+        if (!layer.populations[p].coupler_limited()) {
+            added += cover[p];
+            continue;
+        }
+        const FilledImage f = filled_image(layer.cloud_diameter_ratio, layer.populations[p]);
+        filled *= f.mean(f.area_ratio * cover[p]);
+    }
+    return std::exp(-cloud_area_factor(layer) * added) * filled;
 }
 
 namespace {
@@ -197,6 +296,16 @@ double ImageOverlap::blocking_um2(double r_um) const
     return M_PI * r_um * r_um * m_area_factor;
 }
 
+FilledImage ImageOverlap::filled(const Population& pop) const
+{
+    return filled_image(m_ratio, pop);
+}
+
+double ImageOverlap::cloud_lens_um2(double r_um, double h_um) const
+{
+    return lens_area_um2(m_ratio * r_um, h_um);
+}
+
 double ImageOverlap::overlap_um2(double r_um, double h_um) const
 {
     const double rc_um = m_ratio * r_um;
@@ -228,9 +337,10 @@ double ImageOverlap::overlap_range_um(double r_um) const
     return m_profile == CloudProfile::disc ? 2.0 * rc_um : 2.0 * kGaussianCloudReach * rc_um;
 }
 
-void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, double max_density,
-                       int64_t x0, int64_t y0, int64_t x1, int64_t y1, double px_um,
-                       double py_um, int samples, DyeScratch& scratch, double* transmittance)
+void dye_transmittance(const std::vector<Disc>& grains, const std::vector<size_t>& population_end,
+                       const Layer& layer, double max_density, int64_t x0, int64_t y0,
+                       int64_t x1, int64_t y1, double px_um, double py_um, int samples,
+                       DyeScratch& scratch, double* transmittance)
 {
     const int64_t tw = x1 - x0, th = y1 - y0;
     const int64_t s  = samples;
@@ -266,8 +376,22 @@ void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, doub
     }
 
     if (!gaussian) {
-        disc_rows(grains, layer, max_density, x0, y0, x1, y1, px_um, py_um, samples, scratch,
-                  transmittance);
+        if (!has_coupler_limit(layer)) {
+            disc_rows<CloudCount>(grains, nullptr, layer, max_density, x0, y0, x1, y1, px_um,
+                                  py_um, samples, scratch, transmittance);
+            return;
+        }
+        std::vector<uint8_t>& population = scratch.population;
+        population.resize(grains.size());
+        size_t begin = 0;
+        for (size_t p = 0; p < population_end.size(); ++p) {
+            std::fill(population.begin() + static_cast<std::ptrdiff_t>(begin),
+                      population.begin() + static_cast<std::ptrdiff_t>(population_end[p]),
+                      static_cast<uint8_t>(p));
+            begin = population_end[p];
+        }
+        disc_rows<LimitedCloudCount>(grains, population.data(), layer, max_density, x0, y0, x1,
+                                     y1, px_um, py_um, samples, scratch, transmittance);
         return;
     }
 

@@ -3,6 +3,7 @@
 // of an opaque disc.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <utility>
@@ -32,6 +33,53 @@ double image_reach_factor(const Layer& layer);
 /// (the per-point clamp at max_density is not in this expectation).
 double cloud_area_factor(const Layer& layer);
 
+/// A coupler-limited population's image (Population::max_dye_density,
+/// docs/model.md): the union of its developed grains' cloud discs, of
+/// density max_dye_density wherever one lies. A Boolean model of discs of
+/// radius cloud_diameter_ratio times the grain's, with opacity
+/// o = 1 - 10^-max_dye_density; over a uniformly exposed patch, with m the
+/// mean number of its clouds over a point and s(h) the mean number over
+/// both of two points h apart (the silver disc statistics at the cloud's
+/// radius: n E[P pi R^2] and n E[P lens(R, h)]), and q = e^-m:
+///   E[T_p] = 1 - o (1 - q),
+///   E[T_p(x) T_p(x + h)] - E[T_p]^2 = o^2 q^2 (e^s(h) - 1).
+/// The populations of a layer are independent, so the layer's mean and
+/// two-point moment are the products of its populations'.
+struct FilledImage {
+    double opacity    = 0.0;  ///< o
+    double area_ratio = 1.0;  ///< cloud area over grain area: cloud_diameter_ratio^2
+
+    /// E[T_p] at cloud cover m.
+    double mean(double m) const { return 1.0 + opacity * std::expm1(-m); }
+    /// ln(E[T_p(x) T_p(x + h)] / E[T_p]^2) at cloud cover m and shared
+    /// cover s; `expm1_s` is e^s - 1 (the caller's, computed once).
+    double log_pair_ratio(double m, double expm1_s) const
+    {
+        const double oq = opacity * std::exp(-m), t = mean(m);
+        return std::log1p(oq * oq * expm1_s / (t * t));
+    }
+};
+
+/// The population's FilledImage; its opacity is 0 (and the population's
+/// clouds add, MODEL.md 8) unless it is coupler-limited.
+FilledImage filled_image(double cloud_diameter_ratio, const Population& pop);
+
+/// The mean transmittance of a uniformly exposed patch of a layer (MODEL.md
+/// 5 and 8, with coupler-limited populations: FilledImage) from each
+/// population's grain cover n E[P a] (a the grain's area: the population's
+/// term of coverage_exponent), in the layer's population order: the
+/// populations whose images add block cloud_area_factor times their cover
+/// together, exp(-factor sum cover); each coupler-limited one multiplies
+/// that by FilledImage::mean(ratio^2 cover). The one implementation of
+/// this expectation (expected curves and the pixel scale's mean).
+/// A coupler-limited population moves -ln E[T] by o ratio^2 q / E[T_p] <=
+/// o ratio^2 <= cloud_area_factor per unit of cover, so error bounds that
+/// scale a cover error by cloud_area_factor hold for it too.
+double layer_mean_transmittance(const Layer& layer, const std::vector<double>& cover);
+
+/// Whether any population of the layer is coupler-limited.
+bool has_coupler_limit(const Layer& layer);
+
 /// The second-order statistics of one developed grain's image, for the
 /// Boolean model of a uniformly exposed layer (MODEL.md 5 and 8). With
 /// a_r(x) = 10^-D_1(x) the transmittance of one grain's image (0 inside a
@@ -55,6 +103,11 @@ public:
 
     /// b(r), square micrometres: pi r^2 cloud_area_factor.
     double blocking_um2(double r_um) const;
+    /// For a coupler-limited population (FilledImage): the overlap of two
+    /// of its cloud discs h apart, lens(R, h) at R = cloud_diameter_ratio r.
+    double cloud_lens_um2(double r_um, double h_um) const;
+    /// The FilledImage of one of the layer's populations.
+    FilledImage filled(const Population& pop) const;
     /// k(r, h), square micrometres; k(r, 0) <= b(r), equal for silver.
     double overlap_um2(double r_um, double h_um) const;
     /// The distance from which k(r, h) is 0: twice the image's reach.
@@ -82,6 +135,7 @@ private:
 /// Scratch space for dye_transmittance, reused between calls.
 struct DyeScratch {
     std::vector<size_t> offsets, fill, members;
+    std::vector<uint8_t> population;  ///< each grain's, for coupler limits
     std::vector<int64_t> density;  ///< fixed point, 2^-32 density units
     std::vector<std::pair<double, int>> ends;
     std::vector<double> level, factor;
@@ -98,9 +152,14 @@ struct DyeScratch {
 /// that the sum does not depend on the grains' order. Either way the result
 /// depends only on the grains and absolute pixel coordinates: the same for
 /// any tiling. Grains whose cloud does not reach the block may be passed.
+/// `population_end[p]`: one past the index in `grains` of population p's
+/// last grain (the grains in population order); read only when a
+/// population is coupler-limited (disc clouds: D counts each such
+/// population's covering clouds as max_dye_density if any, FilledImage).
 /// Writes (x1-x0)*(y1-y0) transmittances row-major. `samples`: [1, 256].
-void dye_transmittance(const std::vector<Disc>& grains, const Layer& layer, double max_density,
-                       int64_t x0, int64_t y0, int64_t x1, int64_t y1, double px_um,
-                       double py_um, int samples, DyeScratch& scratch, double* transmittance);
+void dye_transmittance(const std::vector<Disc>& grains, const std::vector<size_t>& population_end,
+                       const Layer& layer, double max_density, int64_t x0, int64_t y0,
+                       int64_t x1, int64_t y1, double px_um, double py_um, int samples,
+                       DyeScratch& scratch, double* transmittance);
 
 }  // namespace filmgrain

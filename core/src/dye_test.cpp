@@ -148,6 +148,68 @@ TEST(Dye, StockKeys)
               std::string::npos);
     EXPECT_NE(error(R"({"layers": [{"cloud_diameter_ratio": 11}]})").find("cloud_diameter_ratio = 11: must be in"),
               std::string::npos);
+    // The coupler limit (a population's key): dye layers with disc clouds
+    // only, at most one cloud's density.
+    ASSERT_TRUE(parse_stock_json(R"({"layers": [{"image": "dye", "cloud_density": 0.7,
+        "populations": [{"max_dye_density": 0.5}, {}]}]})", "t", s));
+    EXPECT_EQ(s.layers[0].populations[0].max_dye_density, 0.5);
+    EXPECT_TRUE(s.layers[0].populations[0].coupler_limited());
+    EXPECT_FALSE(s.layers[0].populations[1].coupler_limited());
+    ASSERT_TRUE(parse_stock_json(stock_to_json(s), "round trip", back));
+    EXPECT_EQ(stock_to_json(back), stock_to_json(s));
+    EXPECT_NE(error(R"({"layers": [{"populations": [{"max_dye_density": 0.5}]}]})")
+                  .find("layers[0].populations[0].max_dye_density = 0.5 needs a dye layer with "
+                        "disc clouds"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"layers": [{"image": "dye", "cloud_profile": "gaussian",
+                  "populations": [{"max_dye_density": 0.5}]}]})")
+                  .find("needs a dye layer with disc clouds"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"layers": [{"image": "dye", "cloud_density": 0.4,
+                  "populations": [{"max_dye_density": 0.5}]}]})")
+                  .find("max_dye_density = 0.5 is above the layer's cloud_density (0.4"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"layers": [{"image": "dye", "populations": [{"max_dye_density": -1}]}]})")
+                  .find("max_dye_density = -1: must be in [0, 20]"),
+              std::string::npos);
+}
+
+// A coupler-limited population's clouds fill (FilledImage): where two of
+// its clouds overlap the density is max_dye_density, not twice a cloud's;
+// a population without the limit adds (MODEL.md 8), and the two
+// populations' densities add. Three concentric disc clouds of radius 3 um
+// in a 20 um pixel: f is the fraction of the pixel the 256 rows' chords
+// cover (the rows are sampled, the levels along them exact: to rounding).
+TEST(Dye, CouplerLimitedCloudsFill)
+{
+    Layer l;
+    l.image                = LayerImage::dye;
+    l.cloud_profile        = CloudProfile::disc;
+    l.cloud_density        = 0.6;
+    l.populations          = { Population(), Population() };
+    l.populations[0].max_dye_density = 0.4;
+    const std::vector<Disc> grains = { { 10.0, 10.0, 3.0 }, { 10.0, 10.0, 3.0 },
+                                       { 10.0, 10.0, 3.0 } };
+    double f = 0.0;
+    for (int j = 0; j < 256; ++j) {
+        const double dy = (j + 0.5) * 20.0 / 256.0 - 10.0;
+        f += dy * dy < 9.0 ? 2.0 * std::sqrt(9.0 - dy * dy) / 20.0 / 256.0 : 0.0;
+    }
+    EXPECT_NEAR(f, 9.0 * M_PI / 400.0, 1e-4);
+    DyeScratch scratch;
+    const auto render = [&](std::vector<size_t> population_end) {
+        double t = 0.0;
+        dye_transmittance(grains, population_end, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 256, scratch,
+                          &t);
+        return t;
+    };
+    // Two clouds of the limited population and one of the other: 0.4 + 0.6.
+    EXPECT_NEAR(render({ 2, 3 }), 1.0 - f + f * std::pow(10.0, -1.0), 1e-12);
+    // All three limited: 0.4.
+    EXPECT_NEAR(render({ 3, 3 }), 1.0 - f + f * std::pow(10.0, -0.4), 1e-12);
+    // Without the limit all three add: 1.8.
+    l.populations[0].max_dye_density = 0.0;
+    EXPECT_NEAR(render({ 2, 3 }), 1.0 - f + f * std::pow(10.0, -1.8), 1e-12);
 }
 
 TEST(Dye, CloudAreaFactorIsTheBlockingIntegral)
@@ -181,8 +243,8 @@ TEST(Dye, OneCloudInAPixel)
     const std::vector<Disc> grains = { { 10.0, 10.0, 1.0 } };
     DyeScratch scratch;
     double t_coarse = 0.0, t_fine = 0.0;
-    dye_transmittance(grains, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 64, scratch, &t_coarse);
-    dye_transmittance(grains, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 256, scratch, &t_fine);
+    dye_transmittance(grains, { grains.size() }, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 64, scratch, &t_coarse);
+    dye_transmittance(grains, { grains.size() }, l, 4.0, 0, 0, 1, 1, 20.0, 20.0, 256, scratch, &t_fine);
     const double expected = 1.0 - cloud_area_factor(l) * M_PI / 400.0;
     // The midpoint rule on a smooth cloud: error ~ (spacing / radius)^2.
     EXPECT_NEAR(t_fine, expected, 1e-5);
@@ -230,16 +292,23 @@ TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
     // profiles, clouds smaller and larger than the grain. The frame's edge
     // (grains outside the frame have no light) stays out of the mean: all
     // grains reaching it are inside (the margins are outside the pixels).
+    // Coupler-limited clouds (max_dye_density > 0: dye.h FilledImage,
+    // layer_mean_transmittance) too, at a density where a third of the plane
+    // lies under two or more clouds.
     struct Case {
         CloudProfile profile;
         double ratio, density;
         Engine engine;
+        double limit = 0.0;
     };
     for (const Case& c : { Case { CloudProfile::disc, 1.0, 0.6, Engine::exact },
                            Case { CloudProfile::gaussian, 1.5, 0.8, Engine::exact },
                            Case { CloudProfile::disc, 0.7, 1.5, Engine::automatic },
-                           Case { CloudProfile::gaussian, 2.0, 0.4, Engine::automatic } }) {
-        const TestScene s = dye_scene(c.profile, c.ratio, c.density, 0.18f);
+                           Case { CloudProfile::gaussian, 2.0, 0.4, Engine::automatic },
+                           Case { CloudProfile::disc, 1.5, 0.9, Engine::exact, 0.7 },
+                           Case { CloudProfile::disc, 1.5, 0.9, Engine::automatic, 0.7 } }) {
+        TestScene s = dye_scene(c.profile, c.ratio, c.density, 0.18f);
+        s.stock.layers[0].populations[0].max_dye_density = c.limit;
         RenderSettings settings;
         settings.engine = c.engine;
         const auto [mean, se] = mean_transmittance(render_scene(s, settings), 96);
@@ -249,7 +318,14 @@ TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
         const double t_error = t * std::log(10.0) * curves[0].density_error;
         EXPECT_LT(std::fabs(mean - t), 4.0 * se + t_error)
             << cloud_profile_name(c.profile) << " ratio " << c.ratio << " " << engine_name(c.engine)
-            << ": measured " << mean << " +- " << se << ", expected " << t;
+            << " limit " << c.limit << ": measured " << mean << " +- " << se << ", expected " << t;
+        if (c.limit > 0.0) {  // not what the same clouds give adding
+            TestScene added = s;
+            added.stock.layers[0].populations[0].max_dye_density = 0.0;
+            std::vector<ExpectedCurve> a;
+            ASSERT_TRUE(expected_curves(added.stock, added.scene, ExpectedCurveOptions {}, a));
+            EXPECT_GT(std::fabs(mean - a[0].transmittance_at(0.18)), 4.0 * se + t_error);
+        }
     }
 }
 
@@ -304,6 +380,16 @@ TEST(Dye, BitIdenticalForThreadsTilesAndRois)
         s.pixels[i] = static_cast<float>(0.18 * std::exp2((static_cast<double>(i % 96) - 48) / 12));
     for (Engine engine : { Engine::exact, Engine::automatic })
         expect_deterministic(s, engine, Roi { 30, 40, 47, 61 });
+    // Coupler-limited disc clouds (docs/model.md) 2.5 grain radii wide, a
+    // limited population beside one whose clouds add.
+    TestScene limited = dye_scene(CloudProfile::disc, 2.5, 0.5, 0.18f);
+    limited.pixels    = s.pixels;
+    Layer& layer      = limited.stock.layers[0];
+    layer.populations.push_back(layer.populations[0]);
+    layer.populations[1].diameter_um *= 0.5;
+    layer.populations[0].max_dye_density = 0.3;
+    for (Engine engine : { Engine::exact, Engine::automatic })
+        expect_deterministic(limited, engine, Roi { 30, 40, 47, 61 });
 }
 
 TEST(Dye, SamplingConverges)

@@ -995,6 +995,14 @@ void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
         why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
             << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
             << format_g(layer.cloud_density) << "): ";
+        std::string limited;  // docs/model.md: coupler-limited populations
+        for (size_t p = 0; p < layer.populations.size(); ++p)
+            if (layer.populations[p].coupler_limited())
+                limited += (limited.empty() ? "" : ", ") + std::to_string(p) + " at "
+                           + format_g(layer.populations[p].max_dye_density);
+        if (!limited.empty())
+            why << "coupler-limited populations " << limited
+                << " (their clouds fill to that density, docs/model.md); ";
         if (plan.dye_samples > 0) {
             path << ":" << plan.dye_samples;
             why << "10^-D "

@@ -31,14 +31,12 @@ constexpr double kLog10E = 0.43429448190325176;
 /// 2^-kOctavesBelow to 2^kOctavesAbove times grey (the pixel model's
 /// range and spacing).
 constexpr int kOctavesBelow = 16, kOctavesAbove = 12, kPerOctave = 16;
-/// E[T] of a uniform patch of one layer at exposure value v (MODEL.md 5),
-/// with the pixel model's size quadrature and P(develop | mean photons);
-/// `cloud_factor` the blocking area of a dye layer's clouds over the
-/// grain's (MODEL.md 8: 1 for silver).
-double mean_transmittance(const std::vector<PixelPopulation>& pops, double v,
-                          double cloud_factor)
+/// E[T] of a uniform patch of one layer at exposure value v (MODEL.md 5
+/// and 8: layer_mean_transmittance), with the pixel model's size
+/// quadrature and P(develop | mean photons).
+double mean_transmittance(const Layer& layer, const std::vector<PixelPopulation>& pops, double v)
 {
-    return std::exp(-cloud_factor * coverage_exponent(pops, v));
+    return layer_mean_transmittance(layer, population_covers(pops, v));
 }
 
 /// The smallest transmittance a density clamp of `max_density` lets through.
@@ -219,6 +217,8 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
 {
     const std::vector<PixelPopulation>& pops = model.populations();
     const double lxs_per_value               = model.lxs_per_value();
+    // The density error of a cover error e: at most cloud_area_factor e
+    // (coupler-limited populations too: layer_mean_transmittance).
     const double cloud_factor                = cloud_area_factor(stock.layers[l]);
     ExpectedCurve curve;
     curve.layer        = stock.layers[l].name;
@@ -228,7 +228,7 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
         CurvePoint c;
         c.value         = v;
         c.exposure_lxs  = v * lxs_per_value;
-        c.transmittance = mean_transmittance(pops, v, cloud_factor);
+        c.transmittance = mean_transmittance(stock.layers[l], pops, v);
         c.density       = clamp_density(c.transmittance, curve.base_density,
                                         min_transmittance(stock.max_density));
         return c;
@@ -247,7 +247,7 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
             const CurvePoint& a = curve.points[curve.points.size() - 2];
             const CurvePoint& b = curve.points.back();
             const double mid
-                = mean_transmittance(pops, std::exp(log_v0 + (i - 0.5) * step), cloud_factor);
+                = mean_transmittance(stock.layers[l], pops, std::exp(log_v0 + (i - 0.5) * step));
             interpolation = std::max(
                 interpolation, std::fabs(0.5 * (a.transmittance + b.transmittance) - mid) / mid);
         }

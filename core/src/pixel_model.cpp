@@ -39,20 +39,32 @@ double pixel_develop_probability(const PixelPopulation& p, double lambda)
     return p.table->probability(static_cast<uint64_t>(std::llround(n)));
 }
 
+double population_cover(const PixelPopulation& pp, double v)
+{
+    double sum = 0.0;
+    for (const SizeNode& node : size_quadrature(*pp.population)) {
+        const double r_um  = pp.grains->radius_at_z_um(node.z);
+        const double a_um2 = M_PI * r_um * r_um;
+        sum += node.weight * a_um2
+               * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
+    }
+    return pp.population->grains_per_um2 * sum;
+}
+
 double coverage_exponent(const std::vector<PixelPopulation>& populations, double v)
 {
     double k = 0.0;
-    for (const PixelPopulation& pp : populations) {
-        double sum = 0.0;
-        for (const SizeNode& node : size_quadrature(*pp.population)) {
-            const double r_um  = pp.grains->radius_at_z_um(node.z);
-            const double a_um2 = M_PI * r_um * r_um;
-            sum += node.weight * a_um2
-                   * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
-        }
-        k += pp.population->grains_per_um2 * sum;
-    }
+    for (const PixelPopulation& pp : populations)
+        k += population_cover(pp, v);
     return k;
+}
+
+std::vector<double> population_covers(const std::vector<PixelPopulation>& populations, double v)
+{
+    std::vector<double> c;
+    for (const PixelPopulation& pp : populations)
+        c.push_back(population_cover(pp, v));
+    return c;
 }
 
 namespace {
@@ -92,10 +104,18 @@ public:
             m_sizes.push_back(std::move(sz));
         }
         distance_grid(std::min(h_min_um, h_max_um), h_max_um, std::max(distance_nodes, 2));
-        for (Sizes& sz : m_sizes)
+        for (size_t p = 0; p < m_sizes.size(); ++p) {
+            Sizes& sz = m_sizes[p];
+            // A coupler-limited population's clouds fill (FilledImage):
+            // its statistics are its cloud discs' union's.
+            sz.limited = pops[p].population->coupler_limited();
+            if (sz.limited)
+                m_filled.push_back(image.filled(*pops[p].population));
             for (size_t k = 0; k < sz.r_um.size(); ++k)
                 for (double h_um : m_h_um)
-                    sz.overlap_um2.push_back(image.overlap_um2(sz.r_um[k], h_um));
+                    sz.overlap_um2.push_back(sz.limited ? image.cloud_lens_um2(sz.r_um[k], h_um)
+                                                        : image.overlap_um2(sz.r_um[k], h_um));
+        }
         lag_weights();
     }
 
@@ -103,9 +123,14 @@ public:
     /// coverage exponent sum n E[P b], the developed density sum n E[P] and,
     /// at each distance node, sum n E[P k(h)]. Every P times a factor (MODEL.md
     /// 10) scales all three by it, so one set serves every log factor.
+    /// A coupler-limited population (FilledImage) keeps its own sums, its
+    /// cloud cover m = n E[P pi R^2] and, at each distance node, n E[P
+    /// lens(R, h)]: its moments are not exponentials of them.
     struct Sums {
         double exponent = 0.0, developed = 0.0;
         std::vector<double> g;
+        std::vector<double> cover;                // [coupler-limited population]
+        std::vector<std::vector<double>> shared;  // [coupler-limited population][distance node]
     };
     Sums sums(double v) const
     {
@@ -115,16 +140,25 @@ public:
             const PixelPopulation& pp = m_pops[p];
             const Sizes& sz           = m_sizes[p];
             const double n            = pp.population->grains_per_um2;
+            double* exponent          = &s.exponent;
+            std::vector<double>* g    = &s.g;
+            if (sz.limited) {
+                s.cover.push_back(0.0);
+                s.shared.emplace_back(m_h_um.size(), 0.0);
+                exponent = &s.cover.back();
+                g        = &s.shared.back();
+            }
             for (size_t k = 0; k < sz.r_um.size(); ++k) {
                 const double a_um2 = M_PI * sz.r_um[k] * sz.r_um[k];
                 const double pd
                     = pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
                 const double nw = n * sz.w[k] * pd;
-                s.exponent += nw * m_image.blocking_um2(sz.r_um[k]);
+                *exponent += nw * (sz.limited ? m_image.cloud_lens_um2(sz.r_um[k], 0.0)
+                                              : m_image.blocking_um2(sz.r_um[k]));
                 s.developed += nw;
                 const double* overlap = &sz.overlap_um2[k * m_h_um.size()];
                 for (size_t j = 0; j < m_h_um.size(); ++j)
-                    s.g[j] += nw * overlap[j];
+                    (*g)[j] += nw * overlap[j];
             }
         }
         return s;
@@ -143,13 +177,19 @@ public:
         const double exponent = factor * s.exponent, developed = factor * s.developed;
         const std::vector<double>& g = s.g;
         m.mean = std::exp(-exponent);
+        for (size_t q = 0; q < m_filled.size(); ++q)
+            m.mean *= m_filled[q].mean(factor * s.cover[q]);
         m.developed_per_pixel = developed * m_px_um * m_py_um;
         // The pixel covariances: C(h) at each distance node against the
         // lags' weights (lag_weights).
         LagArray cov {};
         double integral = 0.0;
         for (size_t j = 0; j < m_h_um.size(); ++j) {
-            const double c = m.mean * m.mean * small_expm1(factor * g[j]);
+            double log_ratio = factor * g[j];  // ln(E[T(x) T(x + h)] / E[T]^2)
+            for (size_t q = 0; q < m_filled.size(); ++q)
+                log_ratio += m_filled[q].log_pair_ratio(factor * s.cover[q],
+                                                        small_expm1(factor * s.shared[q][j]));
+            const double c = m.mean * m.mean * small_expm1(log_ratio);
             const double* w = &m_lag_weight[j * kLagCount];
             for (int lag = 0; lag < kLagCount; ++lag)
                 cov[static_cast<size_t>(lag)] += c * w[lag];
@@ -238,7 +278,9 @@ private:
 
     struct Sizes {
         std::vector<double> r_um, w, overlap_um2;  // [size node][distance node]
+        bool limited = false;  ///< coupler-limited: overlap_um2 is cloud_lens_um2
     };
+    std::vector<FilledImage> m_filled;  ///< the coupler-limited populations', in order
     const std::vector<PixelPopulation>& m_pops;
     const ImageOverlap& m_image;
     double m_px_um, m_py_um;

@@ -61,11 +61,18 @@ double pixel_develop_probability(const PixelPopulation& p, double lambda);
 /// size_quadrature (grain_counts.h): the size nodes of every pixel-scale
 /// integral.
 
-/// The Boolean model's coverage exponent of a layer at exposure value v
-/// (MODEL.md 5): sum over populations of grains_per_um2 E[a P(develop |
-/// lambda(a))], over size_quadrature. A uniform patch's expected
-/// transmittance is exp(-coverage_exponent).
+/// One population's grain cover at exposure value v (MODEL.md 5):
+/// grains_per_um2 E[a P(develop | lambda(a))], over size_quadrature.
+double population_cover(const PixelPopulation& population, double v);
+
+/// The Boolean model's coverage exponent of a layer at exposure value v:
+/// the sum of its populations' population_cover. A uniform patch of silver
+/// has expected transmittance exp(-coverage_exponent); of any layer,
+/// layer_mean_transmittance (dye.h) of the populations' covers.
 double coverage_exponent(const std::vector<PixelPopulation>& populations, double v);
+
+/// Each population's population_cover at v, in order.
+std::vector<double> population_covers(const std::vector<PixelPopulation>& populations, double v);
 
 /// The largest lag (in pixels, each axis) whose correlation the pixel scale
 /// keeps: a layer whose correlations reach further (grains or clouds larger

@@ -64,7 +64,9 @@ struct LagSums {
 /// Pixel transmittances of several 48x48 blocks of 4 um pixels, grain by
 /// grain: exact coverage of silver discs, or (`dye`) the dye image of
 /// MODEL.md 8 at 32 samples per pixel and axis.
-Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullptr,
+/// Of every population of `pps` (a layer's, in order: population p's
+/// grains seeded 100 + block with population index p).
+Sample monte_carlo(const std::vector<PixelPopulation>& pps, double v, const Layer* dye = nullptr,
                    double factor = 1.0, int dye_samples = 32)
 {
     constexpr int kBlocks = 12, kN = 48;
@@ -73,27 +75,34 @@ Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullp
     LagSums lags;
     std::vector<double> means;
     for (int b = 0; b < kBlocks; ++b) {
-        const PopulationGrains grains(*pp.population, 100 + b, 0, 0);
-        const FastGrains fast(grains);
-        const RectUm rect { 0.0, 0.0, kN * kPitch, kN * kPitch };
-        // Grains whose image may reach the block (clouds: to their reach).
-        const double margin = dye ? image_reach_factor(*dye) * grains.radius_at_z_um(9.0) : 0.0;
-        const RectUm near { -margin, -margin, kN * kPitch + margin, kN * kPitch + margin };
         std::vector<Disc> discs;
-        fast.for_each_grain_near(near, [&](double x, double y, double r, uint32_t bits, uint64_t) {
-            const Disc d { x, y, dye ? r * image_reach_factor(*dye) : r };
-            if (!disc_touches_rect(d, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
-                return;
-            const double u = (bits + 0.5) * 0x1.0p-32;
-            if (u >= 1.0 - factor * pixel_develop_probability(
-                               pp, pp.photons_per_value_um2 * v * M_PI * r * r))
-                discs.push_back({ x, y, r });
-        });
+        std::vector<size_t> population_end;
+        for (size_t p = 0; p < pps.size(); ++p) {
+            const PixelPopulation& pp = pps[p];
+            const PopulationGrains grains(*pp.population, 100 + b, 0, static_cast<uint32_t>(p));
+            const FastGrains fast(grains);
+            const RectUm rect { 0.0, 0.0, kN * kPitch, kN * kPitch };
+            // Grains whose image may reach the block (clouds: to their reach).
+            const double margin
+                = dye ? image_reach_factor(*dye) * grains.radius_at_z_um(9.0) : 0.0;
+            const RectUm near { -margin, -margin, kN * kPitch + margin, kN * kPitch + margin };
+            fast.for_each_grain_near(
+                near, [&](double x, double y, double r, uint32_t bits, uint64_t) {
+                    const Disc d { x, y, dye ? r * image_reach_factor(*dye) : r };
+                    if (!disc_touches_rect(d, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
+                        return;
+                    const double u = (bits + 0.5) * 0x1.0p-32;
+                    if (u >= 1.0 - factor * pixel_develop_probability(
+                                       pp, pp.photons_per_value_um2 * v * M_PI * r * r))
+                        discs.push_back({ x, y, r });
+                });
+            population_end.push_back(discs.size());
+        }
         std::vector<double> f(kN * kN);
         if (dye) {
             DyeScratch scratch;
-            dye_transmittance(discs, *dye, 20.0, 0, 0, kN, kN, kPitch, kPitch, dye_samples, scratch,
-                              f.data());
+            dye_transmittance(discs, population_end, *dye, 20.0, 0, 0, kN, kN, kPitch, kPitch,
+                              dye_samples, scratch, f.data());
             for (double& c : f)
                 c = 1.0 - c;  // as a covered fraction, like grid_coverage's
         } else {
@@ -129,6 +138,12 @@ Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullp
     s.se_var  = s.var * std::sqrt(2.0 / (n / 2));
     s.se_rho  = 1.0 / std::sqrt(n / 2);
     return s;
+}
+
+Sample monte_carlo(const PixelPopulation& pp, double v, const Layer* dye = nullptr,
+                   double factor = 1.0, int dye_samples = 32)
+{
+    return monte_carlo(std::vector<PixelPopulation> { pp }, v, dye, factor, dye_samples);
 }
 
 /// The test layer of the tests below: one population of 0.8 um grains at
@@ -201,6 +216,51 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
             const PixelModel::Moments silver = PixelModel::compute(pops, 4.0, 4.0, v);
             EXPECT_GT(std::fabs(silver.mean - m.mean), 5 * s.se_mean) << what;
         }
+    }
+}
+
+// Coupler-limited populations (dye.h FilledImage): a layer of one whose
+// clouds fill (density max_dye_density wherever one lies) and one whose
+// clouds add, against the same grains rendered grain by grain (disc clouds
+// exact along rows: dye_transmittance's LimitedCloudCount), from thin to
+// the limited population's saturation (v = 6: 95% of the plane under its
+// clouds). Tolerances: expect_moments's, from the sampling variance.
+TEST(PixelModel, CouplerLimitedMomentsMatchTheCloudsGrainByGrain)
+{
+    const TestLayer t;
+    Population fine = t.pop;
+    fine.grains_per_um2 = 4.0;
+    fine.diameter_um    = 0.4;
+    const PopulationGrains fine_grains(fine, 1, 0, 1);
+    Layer layer;
+    layer.image                = LayerImage::dye;
+    layer.cloud_profile        = CloudProfile::disc;
+    layer.cloud_diameter_ratio = 1.5;
+    layer.cloud_density        = 0.7;
+    layer.populations          = { t.pop, fine };
+    layer.populations[0].max_dye_density = 0.45;
+    const std::vector<PixelPopulation> pops {
+        { &layer.populations[0], &t.grains, 40.0, &t.curve, &t.table },
+        { &layer.populations[1], &fine_grains, 40.0, &t.curve, &t.table },
+    };
+    const ImageOverlap image(layer);
+    Layer added = layer;  // the same clouds, all adding
+    added.populations[0].max_dye_density = 0.0;
+    for (double v : { 0.4, 1.5, 6.0 }) {
+        const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, image);
+        const Sample s              = monte_carlo(pops, v, &layer);
+        expect_moments(s, m, "coupler-limited v " + std::to_string(v));
+        // The mean is layer_mean_transmittance's.
+        EXPECT_NEAR(m.mean, layer_mean_transmittance(layer, population_covers(pops, v)),
+                    1e-12);
+        // Not the statistics of the same clouds adding.
+        const std::vector<PixelPopulation> added_pops {
+            { &added.populations[0], &t.grains, 40.0, &t.curve, &t.table },
+            { &added.populations[1], &fine_grains, 40.0, &t.curve, &t.table },
+        };
+        const PixelModel::Moments a
+            = PixelModel::compute(added_pops, 4.0, 4.0, v, ImageOverlap(added));
+        EXPECT_GT(std::fabs(a.mean - m.mean), 5 * s.se_mean) << v;
     }
 }
 

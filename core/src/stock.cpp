@@ -39,6 +39,7 @@ const NumberField<Population> kPopulationFields[] = {
     { "k_join_per_s", &Population::k_join_per_s, 0.0, 1e15, false },
     { "k_loss_per_s", &Population::k_loss_per_s, 0.0, 1e15, false },
     { "rate_area_exponent", &Population::rate_area_exponent, -4.0, 4.0, false },
+    { "max_dye_density", &Population::max_dye_density, 0.0, 20.0, false },
 };
 
 const NumberField<Layer> kLayerFields[] = {
@@ -309,9 +310,21 @@ Status Stock::validate() const
                                   " entries: must have 1 to ", kMaxPopulations);
         for (size_t p = 0; p < layer.populations.size(); ++p) {
             const std::string pprefix = prefix + "populations[" + std::to_string(p) + "].";
+            const Population& pop = layer.populations[p];
             for (const auto& f : kPopulationFields)
-                if (Status s = check_range(f, layer.populations[p].*(f.member), pprefix); !s)
+                if (Status s = check_range(f, pop.*(f.member), pprefix); !s)
                     return s;
+            if (pop.coupler_limited()
+                && (layer.image != LayerImage::dye || layer.cloud_profile != CloudProfile::disc))
+                return Status::errorf(pprefix, "max_dye_density = ",
+                                      format_number(pop.max_dye_density),
+                                      " needs a dye layer with disc clouds (image 'dye', "
+                                      "cloud_profile 'disc'); 0 means no coupler limit");
+            if (pop.max_dye_density > layer.cloud_density)
+                return Status::errorf(pprefix, "max_dye_density = ",
+                                      format_number(pop.max_dye_density), " is above the "
+                                      "layer's cloud_density (", format_number(layer.cloud_density),
+                                      "): a coupler limit must be at most one cloud's density");
         }
     }
     if (!inhibition.empty()) {

@@ -63,6 +63,7 @@ public:
                 continue;
             }
             scratch.discs.clear();
+            scratch.population_end.clear();
             uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
             bool plane_filled = false;
             for (const PopulationPlan& pop : layer.populations) {
@@ -139,6 +140,7 @@ public:
                     developed += c.developed;
                     photons += c.photons;
                     events += c.events;
+                    scratch.population_end.push_back(scratch.discs.size());
                     continue;
                 }
                 pop.grains.for_each_grain_near(reach_rect(rect, layer, pop), [&](const Grain& g) {
@@ -159,6 +161,7 @@ public:
                     if (o.developed)
                         scratch.discs.push_back(disc);
                 });
+                scratch.population_end.push_back(scratch.discs.size());
             }
             LayerCounters& c = m_counters[l];
             c.grains += grains;
@@ -514,7 +517,8 @@ private:
         scratch.fraction.resize(static_cast<size_t>(tw * th));
         double* fraction = scratch.fraction.data();
         if (plan.dye_samples > 0) {  // MODEL.md 8: the mean of 10^-D
-            dye_transmittance(scratch.discs, m_stock.layers[layer], m_stock.max_density, x0, y0,
+            dye_transmittance(scratch.discs, scratch.population_end, m_stock.layers[layer],
+                              m_stock.max_density, x0, y0,
                               x1, y1, px, py, plan.dye_samples, scratch.dye, fraction);
             for (int64_t iy = y0; iy < y1; ++iy)
                 for (int64_t ix = x0; ix < x1; ++ix)

@@ -22,6 +22,8 @@ namespace filmgrain {
 /// Per-worker scratch buffers, reused from tile to tile.
 struct TileScratch {
     std::vector<Disc> discs;
+    /// One past each population's last disc in `discs` (dye layers).
+    std::vector<size_t> population_end;
     std::vector<double> fraction;
     GridCoverageScratch grid;
     ScanlineScratch scanline;

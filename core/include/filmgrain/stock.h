@@ -29,6 +29,18 @@ struct Population {
     double k_loss_per_s = 10.0;
     /// Rates scale per grain by (area / mean area)^(-exponent). [-4, 4].
     double rate_area_exponent = 0.0;
+    /// For a dye layer with disc clouds: the coupler limit, the most dye
+    /// density this population's clouds form at a point (docs/model.md,
+    /// "Coupler-limited populations"): where any of its clouds lies, its
+    /// density is max_dye_density, however many overlap (a coupler-starved
+    /// emulsion: overlapping clouds share the coupler, they do not add).
+    /// 0: no limit, its clouds add (MODEL.md 8). Range [0, 20]; when > 0 at
+    /// most the layer's cloud_density.
+    double max_dye_density = 0.0;
+
+    /// Whether the population's clouds fill up to a coupler limit rather
+    /// than add.
+    bool coupler_limited() const { return max_dye_density > 0.0; }
 };
 
 /// The shape of a layer's halation kernel (MODEL.md 9), both normalised to
