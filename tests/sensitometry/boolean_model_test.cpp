@@ -40,6 +40,58 @@ TEST(BooleanModel, MonodisperseCovarianceIsClosedForm)
     EXPECT_EQ(b.overlap(6.5), 0.0);
 }
 
+// A coupler-limited population (core dye.h FilledImage) beside one whose
+// clouds add: the mean is the product of the additive part's exp(-B) and
+// the limited one's 1 - o (1 - e^-m); the covariance is T^2 (e^K(h) (1 +
+// o^2 q^2 (e^s(h) - 1) / T_p^2) - 1). At h = 0 with the additive part
+// absent this is the point variance of T = 1 - o 1{covered}:
+// o^2 q (1 - q), an independent closed form.
+TEST(BooleanModel, CouplerLimitedCovarianceIsClosedForm)
+{
+    Layer layer;
+    layer.image                = LayerImage::dye;
+    layer.cloud_profile        = CloudProfile::disc;
+    layer.cloud_diameter_ratio = 1.5;
+    layer.cloud_density        = 0.8;
+    Population limited;
+    limited.max_dye_density = 0.6;
+    const ImageOverlap image(layer);
+    const auto population = [&](double n, double d_um, bool fill) {
+        PopulationDevelopment pop;
+        pop.grains_per_um2   = n;
+        pop.nodes            = { SizeNode { d_um, 1.0, 1.0 } };
+        pop.develop_fraction = 1.0;
+        pop.filled           = fill ? image.filled(limited) : FilledImage {};
+        return pop;
+    };
+    const double o = 1.0 - std::pow(10.0, -0.6);
+    // Clouds of radius 1.5 um at 0.2 per um^2: m = 0.2 pi 2.25.
+    const double m = 0.2 * M_PI * 2.25, q = std::exp(-m);
+    const BooleanLayer alone({ population(0.2, 2.0, true) }, image, 0.005);
+    EXPECT_NEAR(alone.mean_transmittance(), 1.0 - o * (1.0 - q), 1e-12);
+    EXPECT_NEAR(alone.net_density(), -std::log10(1.0 - o * (1.0 - q)), 1e-12);
+    EXPECT_NEAR(alone.covariance(0.0), o * o * q * (1.0 - q), 1e-12);
+    for (double h : { 0.5, 2.0 }) {
+        const double s = 0.2 * lens_area_um2(1.5, h);
+        EXPECT_NEAR(alone.covariance(h), o * o * q * q * std::expm1(s), 1e-4 * o * o * q)
+            << "h " << h;
+    }
+    EXPECT_EQ(alone.covariance(3.1), 0.0);  // beyond two cloud radii
+    // With an additive population of 1 um grains (clouds 1.5 x, density
+    // 0.8) at 0.5 per um^2.
+    const BooleanLayer both({ population(0.2, 2.0, true), population(0.5, 1.0, false) }, image,
+                            0.005);
+    const double b  = 0.5 * image.blocking_um2(0.5);
+    const double tp = 1.0 - o * (1.0 - q), t = std::exp(-b) * tp;
+    EXPECT_NEAR(both.mean_transmittance(), t, 1e-12);
+    for (double h : { 0.0, 0.5, 1.2 }) {
+        const double k = 0.5 * image.overlap_um2(0.5, h), s = 0.2 * lens_area_um2(1.5, h);
+        const double expected
+            = t * t * std::expm1(k + std::log1p(o * o * q * q * std::expm1(s) / (tp * tp)));
+        EXPECT_NEAR(both.covariance(h), expected, 1e-4 * expected) << "h " << h;
+    }
+}
+
 TEST(BooleanModel, FineGridApertureVarianceApproachesTheIdealDisc)
 {
     const BooleanLayer b = monodisperse(0.1, 6.0, 0.7);

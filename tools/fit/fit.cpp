@@ -49,6 +49,9 @@ constexpr double kHi[4] = { std::log10(kMaxGrainsPerPopulationPerUm2), std::log1
 /// applies (an hours-long grain-by-grain render).
 constexpr double kCloudLo[2] = { std::log10(0.5), std::log10(0.05) };
 constexpr double kCloudHi[2] = { std::log10(2.0), std::log10(5.0) };
+/// Bounds of a coupler-limited population's max_dye_density over its
+/// layer's cloud_density, and where it starts.
+constexpr double kLimitLo = 0.05, kLimitHi = 1.0, kLimitStart = 0.7;
 /// Upper bound of a layer's self-inhibition a (MODEL.md 10) in a stock
 /// whose densities are clamped at max_density M. On a uniform patch the
 /// layer's density above base is S exp(-a min(S, M)) for the uninhibited
@@ -236,7 +239,13 @@ public:
         const size_t np = m_stock.layers[l].populations.size();
         const bool dye  = m_stock.layers[l].image == LayerImage::dye;
         const bool inh  = !m_stock.inhibition.empty();
-        const size_t nd = 4 * np + (dye ? 2 : 0);  // index of the inhibition
+        // The coupler-limited populations' limits follow the clouds.
+        std::vector<size_t> limited;
+        for (size_t p = 0; p < np; ++p)
+            if (m_stock.layers[l].populations[p].coupler_limited())
+                limited.push_back(p);
+        const size_t nc = 4 * np + (dye ? 2 : 0);   // index of the first limit
+        const size_t nd = nc + limited.size();      // index of the inhibition
         const size_t n  = nd + (inh ? 1 : 0);
         std::vector<double> x0(n), lo(n), hi(n);
         for (size_t p = 0; p < np; ++p) {
@@ -256,6 +265,14 @@ public:
                 hi[4 * np + k] = kCloudHi[k];
             }
         }
+        for (size_t k = 0; k < limited.size(); ++k) {
+            const Layer& layer = m_stock.layers[l];
+            x0[nc + k] = std::clamp(layer.populations[limited[k]].max_dye_density
+                                        / layer.cloud_density,
+                                    kLimitLo, kLimitHi);
+            lo[nc + k] = kLimitLo;
+            hi[nc + k] = kLimitHi;
+        }
         if (inh) {
             x0[nd] = std::clamp(m_stock.inhibition[l][l], 0.0, self_inhibition_hi(m_stock));
             lo[nd] = 0.0;
@@ -269,15 +286,18 @@ public:
                 layer.cloud_diameter_ratio = std::pow(10.0, x[4 * np]);
                 layer.cloud_density        = std::pow(10.0, x[4 * np + 1]);
             }
+            for (size_t k = 0; k < limited.size(); ++k)
+                layer.populations[limited[k]].max_dye_density = x[nc + k] * layer.cloud_density;
             if (inh)
                 stock.inhibition[l][l] = x[nd];
         };
         // Tables at 1/100 s for the current rates: built once here.
         DevelopModels models(m_stock, m_options.search_curve);
         sm::FigureOptions fo;
-        fo.curve       = m_options.search_curve;
-        fo.reciprocity = false;
-        Stock trial    = m_stock;
+        fo.curve              = m_options.search_curve;
+        fo.reciprocity        = false;
+        fo.granularity_bounds = false;  // the objective reads the values only
+        Stock trial           = m_stock;
         const auto objective = [&](const std::vector<double>& x) {
             set_layer(trial, x);
             sm::DatasheetFigures f;
@@ -442,6 +462,21 @@ void start_inhibition(const FitOptions& options, Stock& stock)
     stock.inhibitor_diffusion_um = options.inhibitor_diffusion_um;
 }
 
+/// Gives the first options.coupler_limited populations of every dye layer
+/// without a limit one (kLimitStart of the cloud density).
+void start_coupler_limits(const FitOptions& options, Stock& stock)
+{
+    for (Layer& l : stock.layers) {
+        if (l.image != LayerImage::dye)
+            continue;
+        for (size_t p = 0; p < l.populations.size()
+                           && p < static_cast<size_t>(options.coupler_limited);
+             ++p)
+            if (!l.populations[p].coupler_limited())
+                l.populations[p].max_dye_density = kLimitStart * l.cloud_density;
+    }
+}
+
 /// The image the fitted layers get: options.image, else dye for a colour
 /// negative datasheet.
 LayerImage fitted_image(const sm::Datasheet& sheet, const FitOptions& options)
@@ -518,6 +553,7 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
     }
     if (fitted_inhibition(sheet, options))
         start_inhibition(options, s);
+    start_coupler_limits(options, s);
     if (Status st = s.validate(); !st)
         return st;
     out = s;
@@ -556,6 +592,14 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
         return Status::errorf("rounds = ", options.rounds, ": must be in [1, 8]");
     if (options.population_evals < 1 || options.rate_evals < 1)
         return Status::errorf("evaluation budgets must be >= 1");
+    if (options.coupler_limited < 0 || options.coupler_limited > 4)
+        return Status::errorf("coupler_limited = ", options.coupler_limited,
+                              ": must be in [0, 4]");
+    if (options.coupler_limited > 0
+        && (fitted_image(sheet, options) != LayerImage::dye
+            || options.cloud_profile != CloudProfile::disc))
+        return Status::errorf("coupler-limited populations need dye layers with disc clouds "
+                              "(--image dye --cloud-profile disc)");
     if (!(options.max_log_sigma >= kLo[2] && options.max_log_sigma <= kHi[2]))
         return Status::errorf("max_log_sigma = ", options.max_log_sigma, ": must be in [", kLo[2],
                               ", ", kHi[2], "]");
@@ -577,6 +621,7 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
             if (*options.inhibition)
                 start_inhibition(options, stock);
         }
+        start_coupler_limits(options, stock);
         if (Status s = stock.validate(); !s)
             return s;
     } else if (Status s = initial_stock(sheet, options, stock); !s) {

@@ -96,6 +96,13 @@ struct FitOptions {
     /// own images are then kept).
     std::optional<LayerImage> image;
     CloudProfile cloud_profile = CloudProfile::gaussian;
+    /// Coupler-limited populations (Population::max_dye_density, a
+    /// coupler-starved emulsion whose clouds fill rather than add): the
+    /// first `coupler_limited` populations of each dye layer (the largest at
+    /// the start) get a limit, searched with the populations as a fraction
+    /// of the layer's cloud_density in [0.05, 1] (start 0.7); a --start
+    /// stock's own limits are searched as well. Needs disc clouds. [0, 4].
+    int coupler_limited = 0;
     /// Development inhibitors (MODEL.md 10, DIR couplers): each layer's
     /// self-inhibition inhibition[l][l] is searched with its populations
     /// (in [0, 1 / max_density], where every characteristic curve still
@@ -190,7 +197,10 @@ double smallest_falling_miss(double t1, double net1_density, double t2, double n
 /// 2 t_a t_b / (t_a + t_b)). With inhibition (`inhibited`: the stock has
 /// it) the granularity can fall, by as much as smallest_falling_miss allows
 /// a layer of at most `grains_per_um2[i]` grains per um^2 (datasheet layer
-/// i; empty: the no-inhibition reading only).
+/// i; empty: the no-inhibition reading only). Every bound here assumes
+/// images that add: none holds for a coupler-limited population, whose
+/// noise falls as its clouds fill the plane (filmgrain-fit reports none for
+/// such a stock).
 std::vector<std::string> model_limits(const sensitometry::Datasheet& sheet, bool inhibited,
                                       const std::vector<double>& grains_per_um2);
 

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "dye.h"
 #include "fit.h"
 
 namespace sm = filmgrain::sensitometry;
@@ -60,6 +61,12 @@ void usage(std::ostream& os)
           "                     white; with --start, the start stock's own)\n"
           "  --cloud-profile disc|gaussian  dye clouds' profile (default "
        << filmgrain::cloud_profile_name(d.cloud_profile)
+       << ")\n"
+          "  --coupler-limited N  the first N populations of each dye layer are\n"
+          "                     coupler-limited (max_dye_density, searched as 0.05 to 1\n"
+          "                     times cloud_density; needs --cloud-profile disc), 0 to 4\n"
+          "                     (default "
+       << d.coupler_limited
        << ")\n"
           "  --max-log-sigma X  largest diameter_log_sigma of a population, 0.05 to 0.8\n"
           "                     (default "
@@ -253,6 +260,8 @@ int main(int argc, char** argv)
             }
             opt.cloud_profile = v == "disc" ? filmgrain::CloudProfile::disc
                                             : filmgrain::CloudProfile::gaussian;
+        } else if (a == "--coupler-limited") {
+            opt.coupler_limited = static_cast<int>(integer("N", 0, 4));
         } else if (a == "--max-log-sigma") {
             const std::string v = next("a number");
             char* end           = nullptr;
@@ -365,8 +374,16 @@ int main(int argc, char** argv)
                                                 : p.grains_per_um2;
         layer_grains_per_um2.push_back(sum);
     }
+    // model_limits's bounds hold for images that add (silver, MODEL.md 8's
+    // clouds): a coupler-limited population's noise falls as its clouds
+    // fill the plane, which they do not bound.
+    bool coupler_limited = false;
+    for (const filmgrain::Layer& l : stock.layers)
+        coupler_limited = coupler_limited || filmgrain::has_coupler_limit(l);
     const std::vector<std::string> limits
-        = filmgrain::fit::model_limits(sheet, stock.inhibits(), layer_grains_per_um2);
+        = coupler_limited
+              ? std::vector<std::string>()
+              : filmgrain::fit::model_limits(sheet, stock.inhibits(), layer_grains_per_um2);
     std::cout << table;
     for (const std::string& l : limits)
         std::cout << "model limit: " << l << "\n";

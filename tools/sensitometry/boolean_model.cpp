@@ -119,41 +119,66 @@ BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations
     for (const auto& pop : populations) {
         m_developed_per_um2 += pop.grains_per_um2 * pop.develop_fraction;
         m_area_developed += pop.grains_per_um2 * pop.area_developed_um2;
+        const bool limited = pop.filled.opacity > 0.0;
         double blocked = 0.0;
         for (const SizeNode& node : pop.nodes) {
+            const double r_um = 0.5 * node.diameter_um;
             blocked += node.weight * node.develop_probability
-                       * image.blocking_um2(0.5 * node.diameter_um);
+                       * (limited ? image.cloud_lens_um2(r_um, 0.0) : image.blocking_um2(r_um));
             if (node.weight * node.develop_probability > 1e-15)
-                h_max = std::max(h_max, image.overlap_range_um(0.5 * node.diameter_um));
+                h_max = std::max(h_max, image.overlap_range_um(r_um));
         }
-        m_blocking += pop.grains_per_um2 * blocked;
+        if (limited)
+            m_filled.push_back({ pop.filled, pop.grains_per_um2 * blocked, {} });
+        else
+            m_blocking += pop.grains_per_um2 * blocked;
     }
     const size_t steps = static_cast<size_t>(std::ceil(h_max / m_step_um)) + 2;
     m_k.assign(steps, 0.0);
-    // Per node, once: its radius, its weight n w P and how far it reaches.
+    // Per node, once: its radius, its weight n w P, how far it reaches and
+    // which table it adds to (K, or its coupler-limited population's s).
     struct Term {
         double r_um, weight, range_um;
+        std::vector<double>* table;
+        bool limited;
     };
     std::vector<Term> terms;
-    for (const auto& pop : populations)
+    size_t f = 0;
+    for (const auto& pop : populations) {
+        const bool limited       = pop.filled.opacity > 0.0;
+        std::vector<double>* tab = &m_k;
+        if (limited) {
+            tab = &m_filled[f++].k;
+            tab->assign(steps, 0.0);
+        }
         for (const SizeNode& node : pop.nodes) {
             const double w = pop.grains_per_um2 * node.weight * node.develop_probability;
             if (w > 0.0)
                 terms.push_back({ 0.5 * node.diameter_um, w,
-                                  image.overlap_range_um(0.5 * node.diameter_um) });
+                                  image.overlap_range_um(0.5 * node.diameter_um), tab, limited });
         }
+    }
     for (size_t i = 0; i < steps; ++i) {
         const double h = static_cast<double>(i) * m_step_um;
         double k = 0.0;
-        for (const Term& t : terms)
-            if (t.range_um > h)
+        for (const Term& t : terms) {
+            if (!(t.range_um > h))
+                continue;
+            if (t.limited)
+                (*t.table)[i] += t.weight * image.cloud_lens_um2(t.r_um, h);
+            else
                 k += t.weight * image.overlap_um2(t.r_um, h);
+        }
         m_k[i] = k;
     }
     m_range_um = 0.0;
-    for (size_t i = 0; i < steps; ++i)
-        if (m_k[i] > 1e-9 * m_k[0])
+    for (size_t i = 0; i < steps; ++i) {
+        bool reaches = m_k[i] > 1e-9 * m_k[0];
+        for (const Filled& fi : m_filled)
+            reaches = reaches || fi.k[i] > 1e-9 * fi.k[0];
+        if (reaches)
             m_range_um = static_cast<double>(i + 1) * m_step_um;
+    }
 }
 
 Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, double shutter_s,
@@ -173,7 +198,10 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
             return s;
         pops.push_back(std::move(d));
     }
-    out = BooleanLayer(pops, ImageOverlap(stock.layers[layer]));
+    const ImageOverlap image(stock.layers[layer]);
+    for (size_t p = 0; p < pops.size(); ++p)
+        pops[p].filled = image.filled(stock.layers[layer].populations[p]);
+    out = BooleanLayer(pops, image);
     return {};
 }
 
@@ -185,6 +213,7 @@ BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, d
     for (const PixelPopulation& pp : populations) {
         PopulationDevelopment d;
         d.grains_per_um2 = pp.population->grains_per_um2;
+        d.filled         = image.filled(*pp.population);
         for (const filmgrain::SizeNode& q : size_quadrature(*pp.population)) {
             const double r_um  = pp.grains->radius_at_z_um(q.z);
             const double a_um2 = M_PI * r_um * r_um;
@@ -245,9 +274,21 @@ Status exposure_for_predicted_density(const Stock& stock, size_t layer, double n
     return {};
 }
 
-double BooleanLayer::mean_transmittance() const { return std::exp(-coverage()); }
+double BooleanLayer::mean_transmittance() const
+{
+    double t = std::exp(-coverage());
+    for (const Filled& f : m_filled)
+        t *= f.image.mean(f.cover);
+    return t;
+}
 
-double BooleanLayer::net_density() const { return coverage() / std::log(10.0); }
+double BooleanLayer::net_density() const
+{
+    if (m_filled.empty())
+        return coverage() / std::log(10.0);
+    return -std::log10(mean_transmittance());
+}
+
 
 double BooleanLayer::mean_developed_area_um2() const
 {
@@ -267,7 +308,18 @@ double BooleanLayer::overlap(double h_um) const
 double BooleanLayer::covariance(double h_um) const
 {
     const double t = mean_transmittance();
-    return t * t * std::expm1(overlap(h_um));
+    if (m_filled.empty())
+        return t * t * std::expm1(overlap(h_um));
+    double log_ratio = overlap(h_um);
+    const double x   = std::fabs(h_um) / m_step_um;
+    const size_t i   = static_cast<size_t>(x);
+    if (i + 1 < m_k.size() && h_um < m_range_um) {
+        const double w = x - static_cast<double>(i);
+        for (const Filled& f : m_filled)
+            log_ratio += f.image.log_pair_ratio(
+                f.cover, std::expm1(f.k[i] * (1.0 - w) + f.k[i + 1] * w));
+    }
+    return t * t * std::expm1(log_ratio);
 }
 
 double ApertureTemplate::area_um2() const

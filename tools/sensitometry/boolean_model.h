@@ -38,6 +38,9 @@ struct PopulationDevelopment {
     double area2_developed_um4 = 0.0; ///< E[a^2 P]
     /// Monte Carlo standard error of E[a P] (from the P(develop | N) runs).
     double area_developed_se_um2 = 0.0;
+    /// A coupler-limited population's image (core/src/dye.h FilledImage;
+    /// opacity 0: its images add).
+    FilledImage filled;
 };
 
 /// Size-resolved development of `pop` at exposure `exposure_lxs` (the
@@ -59,6 +62,9 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
 /// whose centres are h apart, so B = K(0)), the mean transmittance is
 /// T = exp(-B) and the covariance of the point transmittance at distance h
 /// is C(h) = T^2 (exp(K(h)) - 1). K is tabulated on a fine grid of h.
+/// Coupler-limited populations (FilledImage) are not in B and K: each keeps
+/// its cloud cover m and shared cover s(h), and multiplies T by
+/// FilledImage::mean(m) and 1 + C(h) / T^2 by exp(log_pair_ratio).
 /// Thread safety: const, shareable.
 class BooleanLayer {
 public:
@@ -66,12 +72,13 @@ public:
     explicit BooleanLayer(const std::vector<PopulationDevelopment>& populations,
                           const ImageOverlap& image = ImageOverlap(), double h_step_um = 0.02);
 
-    /// B = sum n E[b P] (silver: sum n E[a P] = K(0)): the density is
-    /// 0.434 B (Nutting, exact in the mean for overlapping discs).
+    /// B = sum n E[b P] over the populations whose images add (silver:
+    /// sum n E[a P] = K(0)): without coupler-limited populations the
+    /// density is 0.434 B (Nutting, exact in the mean for overlapping discs).
     double coverage() const { return m_blocking; }
-    /// T = exp(-B).
+    /// T = exp(-B) times each coupler-limited population's mean.
     double mean_transmittance() const;
-    /// Net density predicted for the layer, -log10(T) = 0.434 B.
+    /// Net density predicted for the layer, -log10(T).
     double net_density() const;
     /// Developed grains per square micrometre, sum n E[P].
     double developed_per_um2() const { return m_developed_per_um2; }
@@ -91,6 +98,12 @@ private:
     double m_developed_per_um2 = 0.0;
     double m_area_developed    = 0.0;
     double m_blocking          = 0.0;  ///< B
+    struct Filled {
+        FilledImage image;
+        double cover = 0.0;       ///< m
+        std::vector<double> k;    ///< s(h) at h = i * m_step_um
+    };
+    std::vector<Filled> m_filled;
 };
 
 /// The Boolean layer of `stock.layers[layer]` for a neutral exposure

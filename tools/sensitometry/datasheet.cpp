@@ -256,26 +256,44 @@ Curves curves_at(const Stock& stock, double shutter_s, DevelopModels& models)
 /// layer l at gross `density` on `ref`'s curves, with its error bound;
 /// false where the curve never reaches the density.
 bool rms_granularity_at(const Stock& stock, const Curves& ref, size_t l, double density,
-                        Figure& out)
+                        bool bound, Figure& out)
 {
     const ExpectedCurve& c = ref.curves[l];
     const double v         = c.value_at_density(density);
     if (!(v > 0.0) || v >= c.points.back().value)
         return false;
     // MODEL.md 10: P -> P exp(-log_factor) for every grain.
-    const BooleanLayer b = boolean_layer_at(ref.models[l]->populations(), v,
-                                            ImageOverlap(stock.layers[l]),
-                                            std::exp(-neutral_log_factor(stock, ref.plain, l, v)));
-    const double sigma_t
-        = std::sqrt(disc_aperture_transmittance_variance(b, kGranularityApertureUm));
-    const double rms = 1000.0 * kLog10E * sigma_t / b.mean_transmittance();
-    // C(h) = T^2 (exp K(h) - 1) scales with K to first order: the relative
-    // error of K bounds the relative error of the variance, half that of
-    // sigma. (coverage_error bounds sum n E[a P]; a dye image blocks
-    // cloud_area_factor times that.)
-    const double rel = b.coverage() > 0.0 ? 0.5 * ref.models[l]->coverage_error()
-                                                * cloud_area_factor(stock.layers[l]) / b.coverage()
-                                          : 0.0;
+    const double factor = std::exp(-neutral_log_factor(stock, ref.plain, l, v));
+    const ImageOverlap image(stock.layers[l]);
+    const auto rms_at = [&](double develop_factor, BooleanLayer& b) {
+        b = boolean_layer_at(ref.models[l]->populations(), v, image, develop_factor);
+        const double sigma_t
+            = std::sqrt(disc_aperture_transmittance_variance(b, kGranularityApertureUm));
+        return 1000.0 * kLog10E * sigma_t / b.mean_transmittance();
+    };
+    BooleanLayer b;
+    const double rms = rms_at(factor, b);
+    double rel       = 0.0;
+    if (bound && !has_coupler_limit(stock.layers[l])) {
+        // C(h) = T^2 (exp K(h) - 1) scales with K to first order: the
+        // relative error of K bounds the relative error of the variance,
+        // half that of sigma. (coverage_error bounds sum n E[a P]; a dye
+        // image blocks cloud_area_factor times that.)
+        rel = b.coverage() > 0.0 ? 0.5 * ref.models[l]->coverage_error()
+                                       * cloud_area_factor(stock.layers[l]) / b.coverage()
+                                 : 0.0;
+    } else if (bound) {
+        // Coupler-limited populations (docs/model.md): their noise does not
+        // scale with their cover, so the figure is evaluated again with
+        // every P raised by the relative error coverage_error / sum n E[a P]
+        // and the change taken as the bound (first order, as above).
+        const double cover = b.developed_per_um2() * b.mean_developed_area_um2();
+        if (cover > 0.0) {
+            BooleanLayer raised;
+            const double e = ref.models[l]->coverage_error() / cover;
+            rel            = std::fabs(rms_at(factor * (1.0 + e), raised) - rms) / rms;
+        }
+    }
     out = { rms, rms * rel };
     return true;
 }
@@ -449,7 +467,7 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             for (const GranularityTarget& g : t.granularity) {
                 const double density = g.net ? c.min_density() + g.density : g.density;
                 Figure rms;
-                if (!rms_granularity_at(stock, ref, l, density, rms))
+                if (!rms_granularity_at(stock, ref, l, density, options.granularity_bounds, rms))
                     return Status::errorf("layer ", t.name, ": density ", density,
                                           " (granularity target) is never reached");
                 f.granularity.push_back(rms);
@@ -506,7 +524,7 @@ Status granularity_against_density(const Stock& stock, const Datasheet& sheet,
         out.emplace_back();
         for (double net : net_densities) {
             Figure rms;
-            if (rms_granularity_at(stock, ref, static_cast<size_t>(l), d_min + net, rms))
+            if (rms_granularity_at(stock, ref, static_cast<size_t>(l), d_min + net, true, rms))
                 out.back().emplace_back(net, rms);
         }
     }

@@ -134,6 +134,10 @@ struct FigureOptions {
     ExpectedCurveOptions curve;
     bool reciprocity  = true;
     bool granularity  = true;
+    /// The granularity figures' error bounds (a layer with coupler-limited
+    /// populations evaluates its granularity once more for it; a search
+    /// that reads only the values may leave them 0).
+    bool granularity_bounds = true;
 };
 
 /// Measures `stock` against `sheet`'s targets analytically. `models` must
