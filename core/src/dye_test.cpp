@@ -329,6 +329,40 @@ TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
     }
 }
 
+// An inhibited layer with a coupler-limited population (MODEL.md 10 and
+// docs/model.md): inhibition thins every P by exp(-log_factor), which
+// scales each population's cover; the expected curve recomputes E[T] from
+// the thinned covers (a coupler-limited layer's E[T] is not a power of its
+// uninhibited one, as an additive layer's is). A rendered uniform patch
+// against it, tolerance as above; and the power the additive reading
+// would give is outside that tolerance (so the test can tell them apart).
+TEST(Dye, InhibitedCouplerLimitedPatchesHaveTheExpectedTransmittance)
+{
+    TestScene s = dye_scene(CloudProfile::disc, 1.5, 0.9, 0.18f);
+    s.stock.layers[0].populations[0].max_dye_density = 0.9;
+    s.stock.inhibition             = { { 1.5 } };
+    s.stock.inhibitor_diffusion_um = 20.0;
+    std::vector<ExpectedCurve> plain, curves;
+    Stock uninhibited = s.stock;
+    uninhibited.inhibition.clear();
+    ASSERT_TRUE(expected_curves(uninhibited, s.scene, ExpectedCurveOptions {}, plain));
+    ASSERT_TRUE(expected_curves(s.stock, s.scene, ExpectedCurveOptions {}, curves));
+    const double t       = curves[0].transmittance_at(0.18);
+    const double t_error = t * std::log(10.0) * curves[0].density_error;
+    const double factor
+        = std::exp(-1.5 * (plain[0].density_at(0.18) - plain[0].base_density));
+    const double power = std::pow(plain[0].transmittance_at(0.18), factor);
+    for (Engine engine : { Engine::exact, Engine::automatic }) {
+        RenderSettings settings;
+        settings.engine       = engine;
+        const auto [mean, se] = mean_transmittance(render_scene(s, settings), 96);
+        EXPECT_LT(std::fabs(mean - t), 4.0 * se + t_error)
+            << engine_name(engine) << ": measured " << mean << " +- " << se << ", expected " << t;
+        EXPECT_GT(std::fabs(power - t), 4.0 * se + t_error)
+            << engine_name(engine) << ": the additive reading " << power << " is as close";
+    }
+}
+
 TEST(Dye, TheSilverLimitIsSilver)
 {
     // Disc clouds of the grain's size and a density far above max_density

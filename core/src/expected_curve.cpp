@@ -228,7 +228,12 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
         CurvePoint c;
         c.value         = v;
         c.exposure_lxs  = v * lxs_per_value;
-        c.transmittance = mean_transmittance(stock.layers[l], pops, v);
+        if (has_coupler_limit(stock.layers[l])) {
+            c.covers        = population_covers(pops, v);
+            c.transmittance = layer_mean_transmittance(stock.layers[l], c.covers);
+        } else {
+            c.transmittance = mean_transmittance(stock.layers[l], pops, v);
+        }
         c.density       = clamp_density(c.transmittance, curve.base_density,
                                         min_transmittance(stock.max_density));
         return c;

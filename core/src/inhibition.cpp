@@ -1,6 +1,8 @@
 // MODEL.md section 10: development inhibitors.
 #include "inhibition.h"
 
+#include "dye.h"
+
 #include <algorithm>
 #include <atomic>
 
@@ -143,14 +145,25 @@ void apply_inhibition(const Stock& stock, std::vector<ExpectedCurve>& curves)
         double largest_density = 0.0;
         for (CurvePoint& p : curves[k].points) {
             const double log_factor = neutral_log_factor(stock, plain, k, p.value);
-            // E[T] = exp(-K) and P -> P exp(-log_factor) scale K alike.
-            p.transmittance = std::pow(p.transmittance, std::exp(-log_factor));
+            if (p.covers.empty()) {
+                // E[T] = exp(-K) and P -> P exp(-log_factor) scale K alike.
+                p.transmittance = std::pow(p.transmittance, std::exp(-log_factor));
+            } else {
+                // Coupler-limited populations (docs/model.md): every
+                // population's cover scales, E[T] is recomputed from them.
+                std::vector<double> thinned = p.covers;
+                for (double& c : thinned)
+                    c *= std::exp(-log_factor);
+                p.transmittance = layer_mean_transmittance(stock.layers[k], thinned);
+            }
             p.density       = density_from_transmittance(p.transmittance, curves[k].max_density,
                                                      curves[k].base_density);
             largest_density = std::max(largest_density, p.density - curves[k].base_density);
         }
         // D_k - base = log10(e) K exp(-log_factor): an error e in
-        // log_factor moves it by at most (D_k - base) e.
+        // log_factor moves it by at most (D_k - base) e. (A coupler-limited
+        // population's -ln E[T_p] is concave in its cover and 0 at 0, so
+        // its change is at most e times itself too.)
         curves[k].density_error += largest_density * error;
     }
 }

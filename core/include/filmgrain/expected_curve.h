@@ -34,6 +34,11 @@ struct CurvePoint {
     double transmittance = 1.0;
     /// base_density - log10(max(E[T], 10^-max_density)) (MODEL.md 5).
     double density = 0.0;
+    /// A layer with coupler-limited populations (docs/model.md): each
+    /// population's grain cover n E[a P] at v (empty for other layers).
+    /// Inhibition (MODEL.md 10) scales every cover by the same factor, and
+    /// such a layer's E[T] is not a power of its uninhibited one.
+    std::vector<double> covers;
 };
 
 /// A layer's expected curve: v = 0 first (the film's D-min: base plus fog),
