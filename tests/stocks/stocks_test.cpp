@@ -11,6 +11,7 @@
 #include <cmath>
 #include <set>
 
+#include "dye.h"
 #include "fit.h"
 #include "filmgrain/render.h"
 
@@ -81,33 +82,28 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
     check_builtin("t-max-100", "kodak-t-max-100.json", 12);
 }
 
-// The colour stocks (dye clouds, self-inhibition) meet speed, every slope
-// and each half of its range, D-min and reciprocity figure, but not the
-// granularities named here (VISION3's falls with density; inhibition lets
-// a layer's fall only as steeply as its grains allow, fit::model_limits,
-// and the search's compromise misses these) nor the named points of the
-// datasheet's characteristic curve (0.1 density, our tolerance: points in
-// the toe and at the top, by 0.10-0.18); the README and docs/stocks say so.
+// The colour stocks (dye clouds, two coupler-limited populations a layer,
+// self-inhibition: docs/model.md) meet speed, every slope and each half of
+// its range, D-min and reciprocity figure and every granularity but
+// 500T's blue at net 0.5 (the search's miss: 19.5 for 25.1), and not the
+// named points of the datasheet's characteristic curve (0.1 density, our
+// tolerance: points in the toe and at the top, by 0.10-0.12); the README
+// and docs/stocks say so.
 TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 {
     // speed, per layer D-min, slope and its halves, RMS at net 0.5 / 1 /
     // 1.5 and 19 curve points, reciprocity at 1e-3, 0.1 and 1 s.
     check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 82,
-                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5", "G RMS at net 1",
-                    "B RMS at net 0.5", "R D at log H 1", "G D at log H -2.75",
-                    "B D at log H 1" });
+                  { "B RMS at net 0.5", "R D at log H -2.75", "G D at log H -2.75",
+                    "G D at log H -2.5", "G D at log H 1" });
 }
 
 TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
 {
     // As 500T with 20 curve points a layer.
     check_builtin("vision3-250d", "kodak-vision3-250d-5207.json", 85,
-                  { "R RMS at net 0.5", "R RMS at net 1.5", "G RMS at net 0.5",
-                    "G RMS at net 1.5", "B RMS at net 0.5", "B RMS at net 1.5",
-                    "R D at log H -2.5", "R D at log H 0.86", "R D at log H 1.1",
-                    "G D at log H -2.5", "G D at log H -2.26", "G D at log H -1.3",
-                    "G D at log H 1.1", "B D at log H -2.5", "B D at log H -2.26",
-                    "B D at log H 1.1" });
+                  { "R D at log H -2.5", "G D at log H -2.5", "G D at log H -1.78",
+                    "B D at log H -2.5" });
 }
 
 // Every built-in stock's characteristic curves rise with exposure: grains
@@ -314,6 +310,11 @@ TEST(Fitter, NoStockFallsBelowTheGranularityBound)
     sheet.has_reciprocity = false;
     Stock base;
     ASSERT_TRUE(load_stock("vision3-500t", base));
+    // The bound is for images that add: the built-in stock's coupler limits
+    // (docs/model.md) are taken off (see CouplerLimitedLayersFallBelowIt).
+    for (Layer& l : base.layers)
+        for (Population& p : l.populations)
+            p.max_dye_density = 0.0;
     // The R and G layers made to fall: a few large fast grains that
     // develop early, many small slow ones that carry the density above, and
     // strong self-inhibition that thins the large ones as the layer grows
@@ -334,6 +335,7 @@ TEST(Fitter, NoStockFallsBelowTheGranularityBound)
             small.diameter_log_sigma   = 0.3;
             small.quantum_efficiency   = 0.1;
             r.populations              = { large, small };
+            r.cloud_profile            = CloudProfile::gaussian;
             r.cloud_diameter_ratio     = 2.0;
             r.cloud_density            = 1.0;
             stocks[v].inhibition[l][l] = self_inhibition[v];
@@ -366,6 +368,37 @@ TEST(Fitter, NoStockFallsBelowTheGranularityBound)
     }
     // The check covers falls, not only rising pairs.
     EXPECT_GE(falling, 2);
+}
+
+// The bound does not hold for coupler-limited populations (docs/model.md),
+// which is why filmgrain-fit reports no model_limits for such a stock: the
+// built-in vision3-250d's red layer (two of its four populations
+// coupler-limited) falls from net 0.5 to 1.5 below the bound its own
+// figure at 0.5 and its own grain count give, beyond both figures' error
+// bounds (what no layer of additive clouds can do, inhibited or not).
+TEST(Fitter, CouplerLimitedLayersFallBelowTheGranularityBound)
+{
+    sm::Datasheet sheet = datasheet("kodak-vision3-250d-5207.json");
+    sheet.has_reciprocity = false;
+    Stock stock;
+    ASSERT_TRUE(load_stock("vision3-250d", stock));
+    ASSERT_TRUE(has_coupler_limit(stock.layers[0]));
+    sm::DatasheetFigures f;
+    std::vector<sm::Comparison> comparisons;
+    const Status s = fit::measure(stock, sheet, ExpectedCurveOptions(), f, comparisons);
+    ASSERT_TRUE(s) << s.message();
+    const auto& targets = sheet.layers[0].granularity;
+    const auto& got     = f.layers[0].granularity;
+    ASSERT_EQ(targets.size(), 3u);
+    double grains_per_um2 = 0.0;
+    for (const Population& p : stock.layers[0].populations)
+        grains_per_um2 += p.grains_per_um2;
+    const double bound = fit::smallest_granularity_after(
+        got[0].value - got[0].error, targets[0].density, targets[2].density, grains_per_um2,
+        targets[0].density + f.layers[0].d_min.value);
+    EXPECT_LT(got[2].value + got[2].error, bound)
+        << "R: " << got[0].value << " at net " << targets[0].density << ", " << got[2].value
+        << " at net " << targets[2].density << ", bound " << bound;
 }
 
 // The render check renders a layer alone where no other layer inhibits it
