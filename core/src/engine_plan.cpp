@@ -239,8 +239,9 @@ ProcessCache<std::string, PixelModel>& pixel_model_cache()
 /// share their tables. It depends on the stock, scene and scan, never on
 /// the pixels, and is the same for any thread count, so a model from the
 /// cache is the one a new build would give. Keyed by the bytes of every
-/// value the build reads (each population's size law, density and photons
-/// per value, its table's serialization and its curve's extent, the image,
+/// value the build reads (each population's size law, density, coupler
+/// limit and photons per value, its table's serialization and its curve's
+/// extent, the image,
 /// the pitch, the log-factor range and the density clamp), compared in
 /// full.
 std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopulation>& pops,
@@ -263,6 +264,7 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
     put(layer.cloud_diameter_ratio);
     put(layer.cloud_density);
     for (const PixelPopulation& p : pops) {
+        put(p.population->max_dye_density);
         put(p.population->grains_per_um2);
         put(p.population->diameter_um);
         put(p.population->diameter_log_sigma);

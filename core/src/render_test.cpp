@@ -380,6 +380,10 @@ TEST(Render, PixelModelsFromTheCacheAreTheRendersOwn)
     add("cloud ratio", dyed, [](TestScene& v) { v.stock.layers[0].cloud_diameter_ratio = 1.7; });
     add("cloud profile", dyed,
         [](TestScene& v) { v.stock.layers[0].cloud_profile = CloudProfile::disc; });
+    TestScene disc = dyed;
+    disc.stock.layers[0].cloud_profile = CloudProfile::disc;
+    add("coupler limit", disc,
+        [](TestScene& v) { v.stock.layers[0].populations[0].max_dye_density = 0.4; });
 
     clear_pixel_model_cache();
     const std::vector<float> base_fresh = render_scene(base, settings);
