@@ -293,8 +293,8 @@ TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
     // (grains outside the frame have no light) stays out of the mean: all
     // grains reaching it are inside (the margins are outside the pixels).
     // Coupler-limited clouds (max_dye_density > 0: dye.h FilledImage,
-    // layer_mean_transmittance) too, at a density where a third of the plane
-    // lies under two or more clouds.
+    // layer_mean_transmittance) too, clouds 1.5 grain radii wide at grey,
+    // where they overlap (the additive reading is checked to differ).
     struct Case {
         CloudProfile profile;
         double ratio, density;

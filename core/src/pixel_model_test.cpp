@@ -223,8 +223,10 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
 // clouds fill (density max_dye_density wherever one lies) and one whose
 // clouds add, against the same grains rendered grain by grain (disc clouds
 // exact along rows: dye_transmittance's LimitedCloudCount), from thin to
-// the limited population's saturation (v = 6: 95% of the plane under its
-// clouds). Tolerances: expect_moments's, from the sampling variance.
+// dense (v = 6: nearly every grain developed, the limited population's
+// clouds over about four fifths of the plane: m ~ 1.5 per um^2 x E[pi
+// (0.75 d)^2] = 1.24 um^2). Tolerances: expect_moments's, from the
+// sampling variance.
 TEST(PixelModel, CouplerLimitedMomentsMatchTheCloudsGrainByGrain)
 {
     const TestLayer t;
