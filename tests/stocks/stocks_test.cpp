@@ -182,6 +182,49 @@ TEST(Datasheet, CurvePointsAreReadOffTheStocksCurve)
     EXPECT_FALSE(parse(R"({"log_h": [-2, -1], "density": [0.3, 0.8], "x": 1})"));  // unknown key
 }
 
+// MODEL.md 9 on a datasheet's uniform patches: halation returns its
+// fraction h of the light (H' = (1 + h) H), scatter only moves it. A
+// layer with halation h measures as the same layer with its sensitivity
+// times 1 + h (every figure: curves, speed, granularity, inhibition), and
+// its speed point lies log10(1 + h) lower than without it (to the chain
+// tables' bound: 0.176 here, about 6 times that bound).
+TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
+{
+    const sm::Datasheet sheet = datasheet("kodak-vision3-500t-5219.json");
+    Stock plain;
+    ASSERT_TRUE(load_stock("vision3-500t", plain));
+    Stock halo = plain, brighter = plain;
+    halo.layers[0].halation           = 0.5;
+    halo.layers[0].halation_radius_um = 220.0;
+    halo.layers[0].scatter            = 0.25;
+    halo.layers[0].scatter_sigma_um   = 5.0;
+    for (double& w : brighter.layers[0].sensitivity)
+        w *= 1.5;
+    ASSERT_EQ(plain.layers[0].name, "R");
+    struct Measured {
+        sm::DatasheetFigures figures;
+        std::vector<sm::Comparison> comparisons;
+    };
+    const auto measure = [&](const Stock& s) {
+        Measured m;
+        const Status st = fit::measure(s, sheet, ExpectedCurveOptions(), m.figures, m.comparisons);
+        EXPECT_TRUE(st) << st.message();
+        return m;
+    };
+    const Measured a = measure(plain), b = measure(halo), c = measure(brighter);
+    ASSERT_EQ(b.comparisons.size(), c.comparisons.size());
+    for (size_t k = 0; k < b.comparisons.size(); ++k) {
+        const sm::Comparison &x = b.comparisons[k], &y = c.comparisons[k];
+        ASSERT_EQ(x.figure, y.figure);
+        EXPECT_NEAR(x.achieved, y.achieved, 1e-9 * std::max(1.0, std::fabs(y.achieved)))
+            << x.figure;
+    }
+    const sm::Figure& ra = a.figures.layers[0].speed_log10_h;
+    const sm::Figure& rb = b.figures.layers[0].speed_log10_h;
+    EXPECT_NEAR(ra.value - rb.value, std::log10(1.5), ra.error + rb.error);
+    EXPECT_GT(std::log10(1.5), 5.0 * (ra.error + rb.error)) << "the test can tell";
+}
+
 TEST(Fitter, RecoversAPerturbedSyntheticTarget)
 {
     // A stock's own figures, perturbed, as a datasheet; the fitter must

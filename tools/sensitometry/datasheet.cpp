@@ -388,12 +388,8 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                       ": the analytic figures need 0 (one P(develop | N) per "
                                       "population)");
     // MODEL.md 9 on a uniform patch: halation adds its fraction of the
-    // light, which these figures do not model yet (scatter moves light
-    // within the patch: no change).
-    for (const Layer& l : stock.layers)
-        if (l.halation != 0.0)
-            return Status::errorf("layer ", l.name, ": halation = ", l.halation,
-                                  ": the analytic figures do not model halation (MODEL.md 9)");
+    // light (Layer::neutral_weight counts it), scatter moves light within
+    // the patch (no change).
     std::vector<int> index;
     for (const LayerTargets& t : sheet.layers) {
         const int l = find_layer(stock, t.name);

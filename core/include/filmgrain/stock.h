@@ -102,9 +102,15 @@ struct Layer {
     /// For dye: a cloud's peak density. Range (0, 20].
     double cloud_density = 1.0;
 
-    /// The layer's exposure value per unit of a neutral grey (MODEL.md 2:
-    /// v = dot(sensitivity, (y, y, y))): the sum of the weights.
-    double neutral_weight() const { return sensitivity[0] + sensitivity[1] + sensitivity[2]; }
+    /// The layer's exposure value per unit of a uniform neutral grey: MODEL.md
+    /// 2's v = dot(sensitivity, (y, y, y)), the sum of the weights, times
+    /// 1 + halation (MODEL.md 9: on a uniform field the halation kernel
+    /// returns its fraction of the light; scatter only moves light).
+    double neutral_weight() const
+    {
+        const double gain = halation > 0.0 && halation_radius_um > 0.0 ? 1.0 + halation : 1.0;
+        return (sensitivity[0] + sensitivity[1] + sensitivity[2]) * gain;
+    }
 
     /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
     /// without spread is rendered exactly as before the keys existed.
