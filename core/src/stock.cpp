@@ -5,7 +5,10 @@
 // cannot be read under one name and written under another.
 #include "filmgrain/stock.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <set>
@@ -77,12 +80,25 @@ constexpr double kMaxInhibition = 10.0;
 constexpr size_t kMaxLayers      = 16;
 constexpr size_t kMaxPopulations = 16;
 
+/// The fewest significant digits that read back as v (0.4, not
+/// 0.40000000000000002; 1.0000000000000002 stays distinct from 1), whole
+/// numbers below 1e17 written out (1000000, not 1e+06).
 std::string format_number(double v)
 {
-    std::ostringstream out;
-    out.precision(17);
-    out << v;
-    return out.str();
+    char buf[40];
+    int digits = 1;
+    for (; digits < 17; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+        if (std::strtod(buf, nullptr) == v)
+            break;
+    }
+    if (std::isfinite(v) && v != 0.0) {
+        const int exponent = static_cast<int>(std::floor(std::log10(std::fabs(v))));
+        if (exponent >= 0 && exponent < 17)
+            digits = std::max(digits, exponent + 1);
+    }
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    return buf;
 }
 
 template<typename T>

@@ -80,6 +80,14 @@ TEST(Stock, ErrorsNameTheKeyValueAndRange)
     expect_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.5}]}]})",
                  "quantum_efficiency = 1.5: must be in [0, 1]");
     expect_error(R"({"exposure_at_grey_lxs": true})", "must be a number, not boolean");
+    // Numbers in the fewest digits that read back as themselves.
+    expect_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.4}]}]})",
+                 "quantum_efficiency = 1.4: must be in [0, 1]");
+    expect_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.0000000000000002}]}]})",
+                 "quantum_efficiency = 1.0000000000000002: must be in [0, 1]");
+    expect_error(R"({"exposure_at_grey_lxs": 2e6})",
+                 "exposure_at_grey_lxs = 2000000: must be in (0, 1000000]");
+    expect_error(R"({"exposure_at_grey_lxs": -2.5e-7})", "exposure_at_grey_lxs = -2.5e-07");
 }
 
 TEST(Stock, UnknownPresetOrMissingFile)
