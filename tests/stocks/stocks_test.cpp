@@ -274,6 +274,46 @@ TEST(Fitter, RecoversAPerturbedSyntheticTarget)
     EXPECT_EQ(stock_to_json(again.stock), stock_to_json(r.stock));
 }
 
+// --layers: only the named layers' populations are searched; the others
+// stay the start's, key for key; a name the datasheet lacks, or no start,
+// is an error.
+TEST(Fitter, SearchesOnlyTheNamedLayers)
+{
+    sm::Datasheet sheet = datasheet("kodak-vision3-500t-5219.json");
+    Stock start;
+    ASSERT_TRUE(load_stock("vision3-500t", start));
+    // A start whose green layer is off, so that the search moves it.
+    start.layers[1].populations[0].quantum_efficiency *= 0.5;
+    fit::FitOptions o;
+    o.start            = start;
+    o.layers           = { "G" };
+    o.rounds           = 1;
+    o.starts           = 1;
+    o.fit_rates        = false;
+    o.population_evals = 30;
+    fit::FitResult r;
+    const Status s = fit::fit_stock(sheet, o, r);
+    ASSERT_TRUE(s) << s.message();
+    ASSERT_EQ(r.stock.layers.size(), 3u);
+    const auto populations = [](const Layer& l) {
+        Stock one;
+        one.layers = { l };
+        one.layers[0].base_density = 0.0;  // fitted for every layer
+        return stock_to_json(one);
+    };
+    EXPECT_EQ(populations(r.stock.layers[0]), populations(start.layers[0]));
+    EXPECT_EQ(populations(r.stock.layers[2]), populations(start.layers[2]));
+    EXPECT_NE(populations(r.stock.layers[1]), populations(start.layers[1]));
+    EXPECT_EQ(r.stock.inhibition[0][0], start.inhibition[0][0]);
+    EXPECT_EQ(r.stock.inhibition[2][2], start.inhibition[2][2]);
+
+    o.layers = { "X" };
+    EXPECT_FALSE(fit::fit_stock(sheet, o, r));
+    o.layers = { "G" };
+    o.start.reset();
+    EXPECT_FALSE(fit::fit_stock(sheet, o, r));
+}
+
 TEST(Fitter, SaysWhatTheModelCannotReach)
 {
     // A slope of 5 over a decade needs 5 density units, beyond the stock's

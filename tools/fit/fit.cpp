@@ -603,6 +603,15 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     if (!(options.max_log_sigma >= kLo[2] && options.max_log_sigma <= kHi[2]))
         return Status::errorf("max_log_sigma = ", options.max_log_sigma, ": must be in [", kLo[2],
                               ", ", kHi[2], "]");
+    if (!options.layers.empty() && !options.start)
+        return Status::errorf("fitting only some layers needs a start stock (--start)");
+    for (const std::string& name : options.layers) {
+        bool found = false;
+        for (const sm::LayerTargets& t : sheet.layers)
+            found = found || t.name == name;
+        if (!found)
+            return Status::errorf("layer '", name, "' is not in datasheet '", sheet.name, "'");
+    }
     Stock stock;
     if (options.start) {
         stock = *options.start;
@@ -632,8 +641,11 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     const bool rates = options.fit_rates && sheet.has_reciprocity;
     for (int round = 0; round < options.rounds; ++round) {
         for (size_t i = 0; i < sheet.layers.size(); ++i)
-            if (Status s = search.populations(i, round); !s)
-                return s;
+            if (options.layers.empty()
+                || std::find(options.layers.begin(), options.layers.end(), sheet.layers[i].name)
+                       != options.layers.end())
+                if (Status s = search.populations(i, round); !s)
+                    return s;
         if (Status s = search.base(); !s)
             return s;
         if (rates && round + 1 < options.rounds)

@@ -89,6 +89,9 @@ struct FitOptions {
     /// A starting stock instead of the physical guess (its populations and
     /// rates; its layers must be the datasheet's).
     std::optional<Stock> start;
+    /// Names of the layers whose populations are searched (the others keep
+    /// the start's); empty: every layer of the datasheet. Needs `start`.
+    std::vector<std::string> layers;
     /// The layers' image (MODEL.md 8): silver discs, or dye clouds of
     /// `cloud_profile` whose cloud_diameter_ratio and cloud_density are
     /// searched with the populations (per layer). Unset: dye for a colour

@@ -81,6 +81,9 @@ void usage(std::ostream& os)
           "                     start stock's own)\n"
           "  --start STOCK      start from this stock (file or preset) instead of the\n"
           "                     physical guess\n"
+          "  --layers A,B,...   search only these layers' populations (the others, and\n"
+          "                     the rates with --no-rates, stay the --start stock's;\n"
+          "                     needs --start; default: every layer)\n"
           "  --name NAME        name of the fitted stock (default: the datasheet's)\n"
           "  --render-check     also render the patches that check every analytic figure\n"
           "                     (exact engine; minutes to hours; each row printed as it\n"
@@ -276,6 +279,18 @@ int main(int argc, char** argv)
             opt.inhibition = false;
         } else if (a == "--start") {
             start_path = next("a stock");
+        } else if (a == "--layers") {
+            const std::string v = next("layer names");
+            size_t b = 0;
+            while (b <= v.size()) {
+                const size_t e = std::min(v.find(',', b), v.size());
+                if (e == b) {
+                    std::cerr << "filmgrain-fit: --layers " << v << ": an empty layer name\n";
+                    return 2;
+                }
+                opt.layers.push_back(v.substr(b, e - b));
+                b = e + 1;
+            }
         } else if (a == "--name") {
             name = next("a name");
         } else if (a == "--threads") {
