@@ -2,8 +2,10 @@
 #include "fit.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <sstream>
 
 #include <nlopt.hpp>
@@ -11,6 +13,7 @@
 #include "expected_curve_model.h"
 #include "analysis.h"
 #include "granularity.h"
+#include "parallel.h"
 #include "patch.h"
 #include "strip.h"
 #include "rng.h"
@@ -297,19 +300,39 @@ public:
         fo.curve              = m_options.search_curve;
         fo.reciprocity        = false;
         fo.granularity_bounds = false;  // the objective reads the values only
-        Stock trial           = m_stock;
-        const auto objective = [&](const std::vector<double>& x) {
+        // One evaluation of the objective on a trial stock of its own.
+        const auto objective = [&](Stock& trial, const std::vector<double>& x) {
             set_layer(trial, x);
             sm::DatasheetFigures f;
-            ++m_evaluations;
             if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
                 return unmeasurable(trial, m_sheet, models);
             return layer_objective(m_sheet, i, f, trial.layer_base_density(l));
         };
+        Stock first_trial        = m_stock;
         std::vector<double> best = x0;
-        double best_j            = objective(x0);
-        for (int s = 0; s < m_options.starts; ++s) {
-            std::vector<double> x = s == 0 ? best : x0;
+        double best_j            = objective(first_trial, x0);  // builds the tables
+        ++m_evaluations;
+        // The starts run side by side: each has its own trial stock, and
+        // the objective only reads the tables built above (one per rate set
+        // and shutter, DevelopModels::get). Each start keeps the first
+        // point of its lowest objective; taken in start order below, they
+        // give what one start after another would (the first point of the
+        // lowest objective overall, and the same stop once it is below
+        // 1e-4): the same stock for any thread count.
+        struct StartResult {
+            std::vector<double> best;
+            double best_j   = INFINITY;
+            int evaluations = 0;
+        };
+        std::vector<StartResult> results(static_cast<size_t>(m_options.starts));
+        std::atomic<bool> stop { false };
+        std::mutex said;
+        parallel_for(m_options.starts, m_options.search_curve.nthreads, stop,
+                     [&](int, int64_t si) {
+            const int s            = static_cast<int>(si);
+            StartResult& result    = results[static_cast<size_t>(s)];
+            Stock trial            = m_stock;
+            std::vector<double> x  = x0;
             if (s > 0)
                 for (size_t k = 0; k < n; ++k) {
                     // Jitter by up to +-15% of the range around the start.
@@ -328,16 +351,17 @@ public:
             opt.set_initial_step(step);
             struct Ctx {
                 decltype(objective)* f;
-                std::vector<double>* best;
-                double* best_j;
-            } ctx { &objective, &best, &best_j };
+                Stock* trial;
+                StartResult* result;
+            } ctx { &objective, &trial, &result };
             opt.set_min_objective(
-                [](const std::vector<double>& x, std::vector<double>&, void* data) {
+                [](const std::vector<double>& xs, std::vector<double>&, void* data) {
                     Ctx* c         = static_cast<Ctx*>(data);
-                    const double j = (*c->f)(x);
-                    if (j < *c->best_j) {
-                        *c->best_j = j;
-                        *c->best   = x;
+                    const double j = (*c->f)(*c->trial, xs);
+                    ++c->result->evaluations;
+                    if (j < c->result->best_j) {
+                        c->result->best_j = j;
+                        c->result->best   = xs;
                     }
                     return j;
                 },
@@ -348,13 +372,24 @@ public:
             } catch (const std::exception&) {
                 // Roundoff or forced stops: the best point is kept above.
             }
+            const std::lock_guard<std::mutex> lock(said);
             say("  round " + std::to_string(round + 1) + ", layer " + m_sheet.layers[i].name
-                + ", start " + std::to_string(s + 1) + ": objective " + format(best_j)
-                + " (1 = one figure at tolerance), " + std::to_string(m_evaluations)
-                + " evaluations so far");
+                + ", start " + std::to_string(s + 1) + " of " + std::to_string(m_options.starts)
+                + " done: objective " + format(result.best_j) + " (1 = one figure at tolerance)");
+        });
+        for (int s = 0; s < m_options.starts; ++s) {
+            const StartResult& r = results[static_cast<size_t>(s)];
+            m_evaluations += r.evaluations;
+            if (r.best_j < best_j) {
+                best_j = r.best_j;
+                best   = r.best;
+            }
             if (best_j < 1e-4)
                 break;
         }
+        say("  round " + std::to_string(round + 1) + ", layer " + m_sheet.layers[i].name
+            + ": objective " + format(best_j) + ", " + std::to_string(m_evaluations)
+            + " evaluations so far");
         set_layer(m_stock, best);
         return {};
     }
@@ -519,7 +554,7 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
         l.image = fitted_image(sheet, options);
         if (l.image == LayerImage::dye) {
             l.cloud_profile        = options.cloud_profile;
-            l.cloud_diameter_ratio = 1.0;
+            l.cloud_diameter_ratio = options.start_cloud_ratio;
             l.cloud_density        = 1.0;
         }
         l.populations.clear();
@@ -530,7 +565,9 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
         const double d_g = t.granularity.empty() ? 1.0 : t.granularity.front().density;
         const double a_dev
             = (rms / 1000.0) * (rms / 1000.0) * sm::kGranularityApertureAreaUm2 / (kLog10E * d_g);
-        const double d_dev = std::sqrt(4.0 * a_dev / M_PI);
+        // Its grains: that image's diameter over the clouds' ratio.
+        const double d_dev = std::sqrt(4.0 * a_dev / M_PI)
+                             / (l.image == LayerImage::dye ? options.start_cloud_ratio : 1.0);
         for (int p = 0; p < options.populations; ++p) {
             Population pop;
             // Largest first, each next 0.7 times as large; together a
@@ -539,7 +576,11 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
             pop.diameter_log_sigma = 0.35;
             const double ea        = M_PI / 4.0 * pop.diameter_um * pop.diameter_um
                               * std::exp(pop.diameter_log_sigma * pop.diameter_log_sigma);
-            pop.grains_per_um2     = 3.2 / options.populations / (kLog10E * ea);
+            // (the developed image's area: a dye layer's cloud).
+            const double image = l.image == LayerImage::dye
+                                     ? options.start_cloud_ratio * options.start_cloud_ratio
+                                     : 1.0;
+            pop.grains_per_um2 = 3.2 / options.populations / (kLog10E * ea * image);
             pop.quantum_efficiency = 0.5;
             pop.k_pair_per_s       = 1e7;
             pop.k_join_per_s       = 1e6;
@@ -600,6 +641,9 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
             || options.cloud_profile != CloudProfile::disc))
         return Status::errorf("coupler-limited populations need dye layers with disc clouds "
                               "(--image dye --cloud-profile disc)");
+    if (!(options.start_cloud_ratio >= 0.5 && options.start_cloud_ratio <= 2.0))
+        return Status::errorf("start_cloud_ratio = ", options.start_cloud_ratio,
+                              ": must be in [0.5, 2]");
     if (!(options.max_log_sigma >= kLo[2] && options.max_log_sigma <= kHi[2]))
         return Status::errorf("max_log_sigma = ", options.max_log_sigma, ": must be in [", kLo[2],
                               ", ", kHi[2], "]");

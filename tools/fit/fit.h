@@ -52,7 +52,8 @@ struct FitOptions {
     /// pixels each way (the VISION3 fits use 0.7 and stay at pixel scale
     /// in a 4K scan).
     double max_log_sigma = 0.8;
-    /// Starts of the population search per layer and round. [1, 16].
+    /// Starts of the population search per layer and round, run side by
+    /// side on search_curve.nthreads threads. [1, 16].
     int starts = 2;
     /// Objective evaluations per start of the population search.
     int population_evals = 500;
@@ -99,6 +100,11 @@ struct FitOptions {
     /// own images are then kept).
     std::optional<LayerImage> image;
     CloudProfile cloud_profile = CloudProfile::gaussian;
+    /// The physical guess's cloud_diameter_ratio for dye layers, [0.5, 2]
+    /// (the search's range): the guess sizes each population's developed
+    /// image by Siedentopf's law from the first granularity target, so its
+    /// grains are that size over this ratio.
+    double start_cloud_ratio = 1.0;
     /// Coupler-limited populations (Population::max_dye_density, a
     /// coupler-starved emulsion whose clouds fill rather than add): the
     /// first `coupler_limited` populations of each dye layer (the largest at

@@ -62,6 +62,11 @@ void usage(std::ostream& os)
           "  --cloud-profile disc|gaussian  dye clouds' profile (default "
        << filmgrain::cloud_profile_name(d.cloud_profile)
        << ")\n"
+          "  --start-cloud-ratio X  dye clouds of the physical guess, in grain\n"
+          "                     diameters, 0.5 to 2: its grains are Siedentopf's\n"
+          "                     developed size over X (default "
+       << d.start_cloud_ratio
+       << ")\n"
           "  --coupler-limited N  the first N populations of each dye layer are\n"
           "                     coupler-limited (max_dye_density, searched as 0.05 to 1\n"
           "                     times cloud_density; needs --cloud-profile disc), 0 to 4\n"
@@ -88,7 +93,9 @@ void usage(std::ostream& os)
           "  --render-check     also render the patches that check every analytic figure\n"
           "                     (exact engine; minutes to hours; each row printed as it\n"
           "                     is measured) and compare (render_check.md)\n"
-          "  --threads N        threads of the chain tables (default 0: all)\n"
+          "  --threads N        threads of the population search's starts (run side by\n"
+          "                     side) and of the chain tables (default 0: all); the\n"
+          "                     fit is the same for any N\n"
           "  -q                 no progress lines\n"
           "  --help             this text\n"
           "Exit status: 0 when every figure is within the issue's tolerances, 3 when the\n"
@@ -265,6 +272,16 @@ int main(int argc, char** argv)
                                             : filmgrain::CloudProfile::gaussian;
         } else if (a == "--coupler-limited") {
             opt.coupler_limited = static_cast<int>(integer("N", 0, 4));
+        } else if (a == "--start-cloud-ratio") {
+            const std::string v   = next("a number");
+            char* end             = nullptr;
+            opt.start_cloud_ratio = std::strtod(v.c_str(), &end);
+            if (end == v.c_str() || *end
+                || !(opt.start_cloud_ratio >= 0.5 && opt.start_cloud_ratio <= 2.0)) {
+                std::cerr << "filmgrain-fit: --start-cloud-ratio " << v
+                          << ": must be a number in [0.5, 2]\n";
+                return 2;
+            }
         } else if (a == "--max-log-sigma") {
             const std::string v = next("a number");
             char* end           = nullptr;
@@ -295,7 +312,7 @@ int main(int argc, char** argv)
             name = next("a name");
         } else if (a == "--threads") {
             const int t = static_cast<int>(integer("N", 0, 1024));
-            opt.search_curve.nthreads = opt.final_curve.nthreads = t;
+            opt.search_curve.nthreads = opt.rate_curve.nthreads = opt.final_curve.nthreads = t;
         } else if (a == "-q") {
             quiet = true;
         } else if (!a.empty() && a[0] == '-') {
