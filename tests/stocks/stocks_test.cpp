@@ -84,18 +84,17 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 
 // The colour stocks (dye clouds, two coupler-limited populations a layer,
 // self-inhibition: docs/model.md) meet speed, every slope and each half of
-// its range, D-min and reciprocity figure and every granularity but
-// 500T's blue at net 0.5 (the search's miss: 19.5 for 25.1), and not the
-// named points of the datasheet's characteristic curve (0.1 density, our
-// tolerance: points in the toe and at the top, by 0.10-0.12); the README
+// its range, D-min, granularity and reciprocity figure, and not the named
+// points of the datasheet's characteristic curve (0.1 density, our
+// tolerance: points in the toe, and 250D's green at log H -1.78, by
+// 0.10-0.12); the README
 // and docs/stocks say so.
 TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 {
     // speed, per layer D-min, slope and its halves, RMS at net 0.5 / 1 /
     // 1.5 and 19 curve points, reciprocity at 1e-3, 0.1 and 1 s.
     check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 82,
-                  { "B RMS at net 0.5", "R D at log H -2.75", "G D at log H -2.75",
-                    "G D at log H -2.5", "G D at log H 1" });
+                  { "G D at log H -2.75", "G D at log H -2.5" });
 }
 
 TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
@@ -268,10 +267,18 @@ TEST(Fitter, RecoversAPerturbedSyntheticTarget)
     EXPECT_EQ(r.comparisons.size(), 7u);  // speed, D-min, slope and its halves, 2 RMS
     expect_all_met(r.comparisons, "synthetic");
 
-    // Deterministic for a seed.
+    // Deterministic for a seed, whatever the threads (the starts run side
+    // by side: Search::populations).
     fit::FitResult again;
     ASSERT_TRUE(fit::fit_stock(sheet, o, again));
     EXPECT_EQ(stock_to_json(again.stock), stock_to_json(r.stock));
+    for (int threads : { 1, 3 }) {
+        fit::FitOptions t = o;
+        t.search_curve.nthreads = t.rate_curve.nthreads = t.final_curve.nthreads = threads;
+        fit::FitResult other;
+        ASSERT_TRUE(fit::fit_stock(sheet, t, other));
+        EXPECT_EQ(stock_to_json(other.stock), stock_to_json(r.stock)) << threads << " threads";
+    }
 }
 
 // --layers: only the named layers' populations are searched; the others
