@@ -282,8 +282,8 @@ TEST(Fitter, RecoversAPerturbedSyntheticTarget)
 }
 
 // --layers: only the named layers' populations are searched; the others
-// stay the start's, key for key; a name the datasheet lacks, or no start,
-// is an error.
+// stay the start's, key for key; a name the datasheet lacks, no start, or
+// a start with --start-cloud-ratio (which sets the guess) is an error.
 TEST(Fitter, SearchesOnlyTheNamedLayers)
 {
     sm::Datasheet sheet = datasheet("kodak-vision3-500t-5219.json");
@@ -316,6 +316,10 @@ TEST(Fitter, SearchesOnlyTheNamedLayers)
 
     o.layers = { "X" };
     EXPECT_FALSE(fit::fit_stock(sheet, o, r));
+    o.layers            = { "G" };
+    o.start_cloud_ratio = 2.0;  // the guess's: not with a start
+    EXPECT_FALSE(fit::fit_stock(sheet, o, r));
+    o.start_cloud_ratio = 1.0;
     o.layers = { "G" };
     o.start.reset();
     EXPECT_FALSE(fit::fit_stock(sheet, o, r));

@@ -647,6 +647,9 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     if (!(options.max_log_sigma >= kLo[2] && options.max_log_sigma <= kHi[2]))
         return Status::errorf("max_log_sigma = ", options.max_log_sigma, ": must be in [", kLo[2],
                               ", ", kHi[2], "]");
+    if (options.start && options.start_cloud_ratio != 1.0)
+        return Status::errorf("start_cloud_ratio sets the physical guess's clouds: a start "
+                              "stock (--start) brings its own");
     if (!options.layers.empty() && !options.start)
         return Status::errorf("fitting only some layers needs a start stock (--start)");
     for (const std::string& name : options.layers) {
