@@ -96,6 +96,7 @@ Status make_regrain_model(const Stock& stock, std::vector<ExpectedCurve> curves,
     RegrainModel m;
     for (size_t l = 0; l < nl; ++l) {
         m.sensitivity.push_back(stock.layers[l].sensitivity);
+        m.uniform_field_gain.push_back(stock.layers[l].uniform_field_gain());
         // The steepest gamma, between points (where the slope is defined).
         double g_max = 0.0;
         const ExpectedCurve& c = curves[l];
@@ -155,10 +156,12 @@ void regrain_pixel(const RegrainModel& m, const float* rgb_in, const float* dens
         const double v         = layer_value(m.sensitivity[l], in);
         if (!(v > 0.0))
             continue;  // no light: no grain to map (the fog's is not exposure)
-        const double t_mean = c.transmittance_at(v);
+        const double v_film = v * m.uniform_field_gain[l];
+        const double t_mean = c.transmittance_at(v_film);
         const double t      = std::pow(10.0, -(static_cast<double>(density[l]) - c.base_density));
-        const double gamma  = std::max(c.gamma_at(v), m.min_gamma[l]);
-        // dv = -(T - E[T]) / (dE[T]/dv), dE[T]/dv = -E[T] gamma / v.
+        const double gamma  = std::max(c.gamma_at(v_film), m.min_gamma[l]);
+        // dv = -(T - E[T]) / (dE[T]/dv), dE[T]/dv = -E[T] gamma / v (gamma
+        // is a log-log slope: the same for v and v_film).
         dv[l] = v / (t_mean * gamma) * (t_mean - t);
     }
     for (int c = 0; c < 3; ++c) {

@@ -14,7 +14,9 @@
 //
 // Regrain: per layer, the density is mapped back to the layer's exposure
 // value through the inverse of its expected curve, linearised at the
-// input's expected transmittance T(v_in):
+// input's expected transmittance T(v_in) (v_in: the layer's value of the
+// input pixel times 1 + halation, what halation makes of a uniform field,
+// MODEL.md 9; v_out - v_in is then divided by that gain):
 //   v_out = v_in - v_in / (T(v_in) g) (T_pixel - T(v_in)),
 //   g = max(gamma(v_in), kRegrainMinGammaFraction * the curve's largest
 //   gamma),
@@ -85,6 +87,10 @@ inline constexpr double kRegrainMinGammaFraction = 0.1;
 struct RegrainModel {
     std::vector<ExpectedCurve> curves;             ///< per layer (stock order)
     std::vector<std::array<double, 3>> sensitivity;  ///< per layer
+    /// Per layer, Layer::uniform_field_gain: the curves' value is the
+    /// exposure the grains get, after MODEL.md 9's spread, which on the
+    /// local mean a pixel stands for is the input's value times this.
+    std::vector<double> uniform_field_gain;
     std::vector<double> min_gamma;                 ///< per layer
     /// M^-1 (3 layers) or, for one layer, each row (1 / sum of weights).
     std::array<std::array<double, 3>, 3> to_rgb {};

@@ -26,7 +26,9 @@ namespace filmgrain {
 /// One point of a layer's expected curve.
 struct CurvePoint {
     /// The layer's exposure value v = dot(sensitivity, rgb), scene-linear
-    /// (MODEL.md 2); the grey card 0.18 gets exposure_at_grey_lxs.
+    /// (MODEL.md 2), as the grains receive it: after MODEL.md 9's spread,
+    /// which on a uniform field of value v gives v * uniform_field_gain()
+    /// (Layer); the grey card 0.18 gets exposure_at_grey_lxs.
     double value = 0.0;
     /// H = v / 0.18 * exposure_at_grey_lxs * 2^exposure_stops, lux-seconds.
     double exposure_lxs = 0.0;

@@ -102,22 +102,27 @@ struct Layer {
     /// For dye: a cloud's peak density. Range (0, 20].
     double cloud_density = 1.0;
 
-    /// The layer's exposure value per unit of a uniform neutral grey: MODEL.md
-    /// 2's v = dot(sensitivity, (y, y, y)), the sum of the weights, times
-    /// 1 + halation (MODEL.md 9: on a uniform field the halation kernel
-    /// returns its fraction of the light; scatter only moves light).
-    double neutral_weight() const
-    {
-        const double gain = halation > 0.0 && halation_radius_um > 0.0 ? 1.0 + halation : 1.0;
-        return (sensitivity[0] + sensitivity[1] + sensitivity[2]) * gain;
-    }
+    /// Whether the layer scatters light / has a halo (MODEL.md 9): a
+    /// fraction and a width both above 0.
+    bool scatters() const { return scatter > 0.0 && scatter_sigma_um > 0.0; }
+    bool halates() const { return halation > 0.0 && halation_radius_um > 0.0; }
 
     /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
     /// without spread is rendered exactly as before the keys existed.
-    bool spreads_light() const
+    bool spreads_light() const { return scatters() || halates(); }
+
+    /// MODEL.md 9 on a uniform field: H' = gain * H, gain = 1 + halation
+    /// (the halation kernel returns its fraction of the light; scatter only
+    /// moves light). What a datasheet figure, read on uniform patches, sees
+    /// of the spread.
+    double uniform_field_gain() const { return halates() ? 1.0 + halation : 1.0; }
+
+    /// The layer's exposure value per unit of a uniform neutral grey: MODEL.md
+    /// 2's v = dot(sensitivity, (y, y, y)), the sum of the weights, times
+    /// uniform_field_gain().
+    double neutral_weight() const
     {
-        return (scatter > 0.0 && scatter_sigma_um > 0.0)
-               || (halation > 0.0 && halation_radius_um > 0.0);
+        return (sensitivity[0] + sensitivity[1] + sensitivity[2]) * uniform_field_gain();
     }
 };
 
