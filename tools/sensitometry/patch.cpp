@@ -16,7 +16,18 @@ double patch_margin_um(const Stock& stock, double pitch_um)
             const double s = pop.diameter_log_sigma;
             r_um = std::max(r_um, 0.5 * pop.diameter_um * std::exp(-0.5 * s * s + 6.0 * s));
         }
-    return r_um + pitch_um;
+    return r_um + patch_spread_reach_um(stock) + pitch_um;
+}
+
+double patch_spread_reach_um(const Stock& stock)
+{
+    // The kernels' truncation (core/src/light_spread.h: 6 sigma) and
+    // radius; inhibition blurs densities made from the spread exposure.
+    double spread_um = 0.0;
+    for (const Layer& layer : stock.layers)
+        spread_um = std::max(spread_um, (layer.scatters() ? 6.0 * layer.scatter_sigma_um : 0.0)
+                                            + (layer.halates() ? layer.halation_radius_um : 0.0));
+    return spread_um + (stock.inhibits() ? 6.0 * stock.inhibitor_diffusion_um : 0.0);
 }
 
 double density_from_mean_transmittance(double mean_transmittance, double base_density)
@@ -40,11 +51,18 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     const int64_t margin_px = static_cast<int64_t>(std::ceil(patch_margin_um(stock, pitch_um) / pitch_um));
     const int64_t scan_px   = side_px + 2 * margin_px;
 
-    // A one-pixel grey input over the whole frame: every grain whose disc
-    // lies in the frame sees the same exposure. Grey y = 0.18 at an
-    // exposure offset of log2(H / exposure_at_grey) gives H exactly
-    // (MODEL.md 2: H = v / 0.18 * exposure_at_grey_lxs * 2^stops).
+    // A grey input over the whole frame: every grain whose disc lies in
+    // the frame sees the same exposure. Grey y = 0.18 at an exposure
+    // offset of log2(H / exposure_at_grey) gives H exactly (MODEL.md 2:
+    // H = v / 0.18 * exposure_at_grey_lxs * 2^stops). One input pixel,
+    // unless the stock spreads light or inhibits development (MODEL.md 9,
+    // 10): those act on the input's pixels with nothing beyond the frame,
+    // so the input has the scan's pixels and the margin the kernels'
+    // reach, and the square's pixels see a uniform field's values.
     const float grey = spec.exposure_lxs > 0.0 ? 0.18f : 0.0f;
+    const bool spreads = patch_spread_reach_um(stock) > 0.0;
+    const std::vector<float> input_pixels(
+        spreads ? static_cast<size_t>(scan_px * scan_px) : size_t(1), grey);
     SceneSettings scene;
     scene.exposure_stops = spec.exposure_lxs > 0.0
                                ? std::log2(spec.exposure_lxs / stock.exposure_at_grey_lxs)
@@ -52,7 +70,8 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     scene.shutter_s      = spec.shutter_s;
     scene.frame_width_mm = static_cast<double>(scan_px) * pitch_um / 1000.0;
     scene.seed           = spec.seed;
-    const ImageView input { &grey, 1, 1, 1 };
+    const int64_t input_px = spreads ? scan_px : 1;
+    const ImageView input { input_pixels.data(), input_px, input_px, 1 };
     RenderSettings rs;
     rs.engine     = settings.engine;
     if (settings.kinetics) {

@@ -94,8 +94,13 @@ struct PatchReading {
 
 /// Margin around the measured square, micrometres: the radius of a grain
 /// at z = 6 of the largest population's log-normal (a grain in 1e9 is
-/// larger), plus one pixel.
+/// larger), plus patch_spread_reach_um, plus one pixel.
 double patch_margin_um(const Stock& stock, double pitch_um);
+
+/// How far the stock's light spread and inhibitor blur (MODEL.md 9, 10)
+/// carry a point's light or density, micrometres (0 for a stock with
+/// neither): the square's pixels then see what a uniform field gives them.
+double patch_spread_reach_um(const Stock& stock);
 
 /// Exposes and reads one patch with render_negative. `transmittance`, if
 /// not null, receives per layer the side_px x side_px pixel transmittances
