@@ -521,6 +521,25 @@ LayerImage fitted_image(const sm::Datasheet& sheet, const FitOptions& options)
     return sheet.kind == "colour-negative" ? LayerImage::dye : LayerImage::silver;
 }
 
+/// FitOptions::light_spread given to `stock`'s layers, each population's
+/// quantum efficiency divided by the uniform-field gain it adds.
+void apply_light_spread(const FitOptions& options, Stock& stock)
+{
+    for (Layer& l : stock.layers) {
+        const auto it = options.light_spread.find(l.name);
+        if (it == options.light_spread.end())
+            continue;
+        const double before  = l.uniform_field_gain();
+        l.scatter            = it->second.scatter;
+        l.scatter_sigma_um   = it->second.scatter_sigma_um;
+        l.halation           = it->second.halation;
+        l.halation_radius_um = it->second.halation_radius_um;
+        l.halation_kernel    = it->second.halation_kernel;
+        for (Population& p : l.populations)
+            p.quantum_efficiency *= before / l.uniform_field_gain();
+    }
+}
+
 }  // namespace
 
 Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stock& out)
@@ -650,6 +669,14 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     if (options.start && options.start_cloud_ratio != 1.0)
         return Status::errorf("start_cloud_ratio sets the physical guess's clouds: a start "
                               "stock (--start) brings its own");
+    for (const auto& [name, spread] : options.light_spread) {
+        bool found = false;
+        for (const sm::LayerTargets& t : sheet.layers)
+            found = found || t.name == name;
+        if (!found)
+            return Status::errorf("light spread for layer '", name, "', which is not in datasheet '",
+                                  sheet.name, "'");
+    }
     if (!options.layers.empty() && !options.start)
         return Status::errorf("fitting only some layers needs a start stock (--start)");
     for (const std::string& name : options.layers) {
@@ -683,6 +710,13 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     } else if (Status s = initial_stock(sheet, options, stock); !s) {
         return s;
     }
+    {
+        // The spread's keys are checked before the search, not after it.
+        Stock spread = stock;
+        apply_light_spread(options, spread);
+        if (Status s = spread.validate(); !s)
+            return s;
+    }
     out = FitResult();
     Search search(sheet, options, stock, out.evaluations);
     const bool rates = options.fit_rates && sheet.has_reciprocity;
@@ -699,6 +733,7 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
             if (Status s = search.rates(round); !s)
                 return s;
     }
+    apply_light_spread(options, stock);
     if (options.progress)
         options.progress("measuring the result at full precision ...");
     if (Status s = measure(stock, sheet, options.final_curve, out.figures, out.comparisons); !s)

@@ -28,6 +28,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -122,6 +123,23 @@ struct FitOptions {
     /// (a --start stock's own inhibition is then kept).
     std::optional<bool> inhibition;
     double inhibitor_diffusion_um = 20.0;
+    /// Light spread (MODEL.md 9) of the fitted stock's layers, by layer
+    /// name: a layer named here gets exactly these five keys (the others
+    /// keep the start's, or none). A choice: no datasheet figure measures
+    /// it. The figures are read on uniform patches, where scatter moves no
+    /// light and halation returns its fraction of it
+    /// (Layer::uniform_field_gain), so the search runs without this spread
+    /// and the result's quantum efficiencies are then divided by the gain
+    /// it adds (MODEL.md 2: N_g's mean is quantum_efficiency times H):
+    /// every figure stays where the search put it, to rounding.
+    struct LayerSpread {
+        double scatter            = 0.0;
+        double scatter_sigma_um   = 0.0;
+        double halation           = 0.0;
+        double halation_radius_um = 0.0;
+        HalationKernel halation_kernel = HalationKernel::disc;
+    };
+    std::map<std::string, LayerSpread> light_spread;
     /// Progress lines (nullptr: silent).
     std::function<void(const std::string&)> progress;
 };

@@ -1,13 +1,17 @@
 // filmgrain-fit: fits a stock to a datasheet's published figures, or
 // measures a stock against one. Usage: see --help.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -78,6 +82,20 @@ void usage(std::ostream& os)
        << d.max_log_sigma
        << "; the VISION3 fits use 0.7 and\n"
           "                     stay at pixel scale in a 4K scan)\n"
+          "  --scatter L=F,...  the fitted stock's scatter (MODEL.md 9): fraction F of\n"
+          "                     layer L's light, a Gaussian of --scatter-sigma-um\n"
+          "                     (default: none; with --start, the start stock's own)\n"
+          "  --scatter-sigma-um X  micrometres, 0 to 1000 (needed with --scatter)\n"
+          "  --halation L=F,... the fitted stock's halation (MODEL.md 9): fraction F of\n"
+          "                     layer L's light reflected back, in a kernel of\n"
+          "                     --halation-radius-um (default: none; with --start, the\n"
+          "                     start stock's own). A layer named in either list gets\n"
+          "                     exactly these keys. Uniform patches see halation as\n"
+          "                     1 + F times the light and scatter not at all: the search\n"
+          "                     runs without them, then every quantum efficiency of\n"
+          "                     the layer is divided by 1 + F (the same figures)\n"
+          "  --halation-radius-um X  micrometres, 0 to 5000 (needed with --halation)\n"
+          "  --halation-kernel disc|ring  (default disc)\n"
           "  --inhibition, --no-inhibition  search each layer's self-inhibition (MODEL.md\n"
           "                     10, diffusion "
        << d.inhibitor_diffusion_um
@@ -101,6 +119,23 @@ void usage(std::ostream& os)
           "Exit status: 0 when every figure is within the issue's tolerances, 3 when the\n"
           "fit or measurement completed but some missed (the report says which), 1 on\n"
           "errors, 2 on usage errors.\n";
+}
+
+/// A comma-separated list of non-empty items (exits 2 on an empty one).
+std::vector<std::string> split_commas(const std::string& option, const std::string& v)
+{
+    std::vector<std::string> out;
+    size_t b = 0;
+    while (b <= v.size()) {
+        const size_t e = std::min(v.find(',', b), v.size());
+        if (e == b) {
+            std::cerr << "filmgrain-fit: " << option << " " << v << ": an empty item\n";
+            std::exit(2);
+        }
+        out.push_back(v.substr(b, e - b));
+        b = e + 1;
+    }
+    return out;
 }
 
 std::string stamp(double seconds)
@@ -203,6 +238,9 @@ int main(int argc, char** argv)
     filmgrain::fit::FitOptions opt;
     std::string sheet_path, out_path, report_dir, measure_path, start_path, name;
     bool quiet = false, check = false;
+    std::map<std::string, double> scatter, halation;
+    std::optional<double> scatter_sigma_um, halation_radius_um;
+    std::optional<filmgrain::HalationKernel> halation_kernel;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const auto next = [&](const char* what) -> std::string {
@@ -222,6 +260,33 @@ int main(int argc, char** argv)
                 std::exit(2);
             }
             return x;
+        };
+        const auto number = [&](const char* what, double lo, double hi) -> double {
+            const std::string v = next(what);
+            char* end           = nullptr;
+            const double x      = std::strtod(v.c_str(), &end);
+            if (end == v.c_str() || *end || !(x >= lo && x <= hi)) {
+                std::cerr << "filmgrain-fit: " << a << " " << v << ": must be a number in [" << lo
+                          << ", " << hi << "]\n";
+                std::exit(2);
+            }
+            return x;
+        };
+        // LAYER=FRACTION,... (--scatter, --halation): fractions in [0, 1].
+        const auto per_layer = [&](std::map<std::string, double>& out) {
+            const std::string v = next("LAYER=FRACTION,...");
+            for (const std::string& item : split_commas(a, v)) {
+                const size_t eq = item.find('=');
+                char* end       = nullptr;
+                const double x  = eq == std::string::npos ? NAN : std::strtod(item.c_str() + eq + 1, &end);
+                if (eq == 0 || eq == std::string::npos || *end || end == item.c_str() + eq + 1
+                    || !(x >= 0.0 && x <= 1.0) || out.count(item.substr(0, eq))) {
+                    std::cerr << "filmgrain-fit: " << a << " " << v << ": '" << item
+                              << "' is not LAYER=FRACTION with a fraction in [0, 1] (each layer once)\n";
+                    std::exit(2);
+                }
+                out[item.substr(0, eq)] = x;
+            }
         };
         if (a == "--help" || a == "-h") {
             usage(std::cout);
@@ -273,23 +338,25 @@ int main(int argc, char** argv)
         } else if (a == "--coupler-limited") {
             opt.coupler_limited = static_cast<int>(integer("N", 0, 4));
         } else if (a == "--start-cloud-ratio") {
-            const std::string v   = next("a number");
-            char* end             = nullptr;
-            opt.start_cloud_ratio = std::strtod(v.c_str(), &end);
-            if (end == v.c_str() || *end
-                || !(opt.start_cloud_ratio >= 0.5 && opt.start_cloud_ratio <= 2.0)) {
-                std::cerr << "filmgrain-fit: --start-cloud-ratio " << v
-                          << ": must be a number in [0.5, 2]\n";
-                return 2;
-            }
+            opt.start_cloud_ratio = number("a number", 0.5, 2.0);
         } else if (a == "--max-log-sigma") {
-            const std::string v = next("a number");
-            char* end           = nullptr;
-            opt.max_log_sigma   = std::strtod(v.c_str(), &end);
-            if (end == v.c_str() || *end || !(opt.max_log_sigma >= 0.05 && opt.max_log_sigma <= 0.8)) {
-                std::cerr << "filmgrain-fit: --max-log-sigma " << v << ": must be a number in [0.05, 0.8]\n";
+            opt.max_log_sigma = number("a number", 0.05, 0.8);
+        } else if (a == "--scatter") {
+            per_layer(scatter);
+        } else if (a == "--scatter-sigma-um") {
+            scatter_sigma_um = number("micrometres", 0.0, 1000.0);
+        } else if (a == "--halation") {
+            per_layer(halation);
+        } else if (a == "--halation-radius-um") {
+            halation_radius_um = number("micrometres", 0.0, 5000.0);
+        } else if (a == "--halation-kernel") {
+            const std::string v = next("disc or ring");
+            if (v != "disc" && v != "ring") {
+                std::cerr << "filmgrain-fit: --halation-kernel " << v << ": must be disc or ring\n";
                 return 2;
             }
+            halation_kernel = v == "disc" ? filmgrain::HalationKernel::disc
+                                          : filmgrain::HalationKernel::ring;
         } else if (a == "--inhibition") {
             opt.inhibition = true;
         } else if (a == "--no-inhibition") {
@@ -297,17 +364,7 @@ int main(int argc, char** argv)
         } else if (a == "--start") {
             start_path = next("a stock");
         } else if (a == "--layers") {
-            const std::string v = next("layer names");
-            size_t b = 0;
-            while (b <= v.size()) {
-                const size_t e = std::min(v.find(',', b), v.size());
-                if (e == b) {
-                    std::cerr << "filmgrain-fit: --layers " << v << ": an empty layer name\n";
-                    return 2;
-                }
-                opt.layers.push_back(v.substr(b, e - b));
-                b = e + 1;
-            }
+            opt.layers = split_commas(a, next("layer names"));
         } else if (a == "--name") {
             name = next("a name");
         } else if (a == "--threads") {
@@ -325,6 +382,30 @@ int main(int argc, char** argv)
                       << ")\n";
             return 2;
         }
+    }
+    // Nothing silently ignored: a width without its fraction is an error.
+    if ((scatter_sigma_um && scatter.empty()) || (halation_radius_um && halation.empty())
+        || (halation_kernel && halation.empty())) {
+        std::cerr << "filmgrain-fit: --scatter-sigma-um needs --scatter, --halation-radius-um "
+                     "and --halation-kernel need --halation\n";
+        return 2;
+    }
+    for (const auto* list : { &scatter, &halation })
+        for (const auto& [layer, fraction] : *list) {
+            filmgrain::fit::FitOptions::LayerSpread& ls = opt.light_spread[layer];
+            if (list == &scatter) {
+                ls.scatter          = fraction;
+                ls.scatter_sigma_um = scatter_sigma_um.value_or(0.0);
+            } else {
+                ls.halation           = fraction;
+                ls.halation_radius_um = halation_radius_um.value_or(0.0);
+                ls.halation_kernel    = halation_kernel.value_or(filmgrain::HalationKernel::disc);
+            }
+        }
+    if (!opt.light_spread.empty() && !measure_path.empty()) {
+        std::cerr << "filmgrain-fit: --scatter and --halation set a fitted stock's spread; "
+                     "--measure measures a stock as it is\n";
+        return 2;
     }
     if (sheet_path.empty() || (out_path.empty() && measure_path.empty())) {
         usage(std::cerr);
