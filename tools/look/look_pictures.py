@@ -1,18 +1,22 @@
 #!/usr/bin/python3
 """The pictures of docs/look (README, "Halation, scatter and inhibitors").
 
-Renders the built-in look chart (filmgrain --chart) with the colour preset
-and with `no-remjet` (the same grains with MODEL.md 9's halation and scatter
-and MODEL.md 10's inhibitors), then writes
+Renders the built-in look chart (filmgrain --chart) with `vision3-500t`
+(fitted to VISION3 500T's datasheet; its residual halation behind rem-jet,
+scatter, inhibitors and dye clouds, MODEL.md 8-10) and with `no-remjet`
+(the same film without rem-jet: strong halation), then writes
   docs/look/chart_<stock>.png   the whole chart, as --preview shows it
   docs/look/halation.png        the point lights, both stocks side by side
   docs/look/edge_profile.png    the density across the grey rectangle's
                                 left edge: no-remjet with and without its
                                 inhibition (the adjacency effect)
-  docs/look/dye_vs_silver.png   the grey rectangle, 2x: color-negative's
-                                silver grains beside the same grains as
-                                no-remjet's dye clouds (which block as much
-                                light on a uniform patch: the same density)
+  docs/look/dye_vs_silver.png   the grey rectangle, 2x: the paper-scale
+                                `color-negative`'s silver grains beside the
+                                same grains as gaussian dye clouds that block
+                                as much light on a uniform patch (the same
+                                density; at VISION3's sub-micron scale no
+                                single grain or cloud is visible in a
+                                6.25 um pixel)
 and prints each render's time. Usage (from the repository root, after
 scripts/build):  tools/look/look_pictures.py [--filmgrain build/plugin/filmgrain]
 """
@@ -56,7 +60,7 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
-        plain = render(a.filmgrain, "color-negative", tmp, "chart_color-negative")
+        render(a.filmgrain, "vision3-500t", tmp, "chart_vision3-500t")
         look = render(a.filmgrain, "no-remjet", tmp, "chart_no-remjet")
         stock = json.loads(subprocess.run([a.filmgrain, "--print-stock", "no-remjet"], check=True,
                                           capture_output=True, text=True).stdout)
@@ -65,16 +69,17 @@ def main():
         with open(no_inhibition, "w") as f:
             json.dump(stock, f)
         uninhibited = render(a.filmgrain, no_inhibition, tmp, "uninhibited", preview=False)
-        # color-negative with no-remjet's dye clouds and nothing else of it.
+        # color-negative's silver grains, and the same grains as gaussian
+        # dye clouds of peak density 1 and 1.177 grain radii, which block as
+        # much light on a uniform patch as the grain's opaque disc
+        # (cloud_area_factor: (1 - 10^-D) integrated over the cloud).
+        plain = render(a.filmgrain, "color-negative", tmp, "chart_color-negative")
         plain_stock = json.loads(subprocess.run(
             [a.filmgrain, "--print-stock", "color-negative"], check=True, capture_output=True,
             text=True).stdout)
-        for layer, look_layer in zip(plain_stock["layers"],
-                                     json.loads(subprocess.run(
-                                         [a.filmgrain, "--print-stock", "no-remjet"], check=True,
-                                         capture_output=True, text=True).stdout)["layers"]):
-            for key in ("image", "cloud_profile", "cloud_diameter_ratio", "cloud_density"):
-                layer[key] = look_layer[key]
+        for layer in plain_stock["layers"]:
+            layer.update(image="dye", cloud_profile="gaussian", cloud_diameter_ratio=1.177,
+                         cloud_density=1.0)
         dye_stock = os.path.join(tmp, "color-negative-dye.json")
         with open(dye_stock, "w") as f:
             json.dump(plain_stock, f)
@@ -95,13 +100,13 @@ def main():
         out = oiio.ImageBuf(oiio.ImageSpec(both.shape[1], both.shape[0], both.shape[2], oiio.UINT8))
         out.set_pixels(oiio.ROI(), both)
         out.write(os.path.join(a.out, "dye_vs_silver.png"))
-        for name in ("chart_color-negative", "chart_no-remjet"):
+        for name in ("chart_vision3-500t", "chart_no-remjet"):
             os.replace(os.path.join(tmp, name + ".png"), os.path.join(a.out, name + ".png"))
 
     # The point lights, 1:1, side by side.
     crops = []
     x, y = POINT
-    for name in ("chart_color-negative", "chart_no-remjet"):
+    for name in ("chart_vision3-500t", "chart_no-remjet"):
         img = oiio.ImageBuf(os.path.join(a.out, name + ".png")).get_pixels(oiio.UINT8)
         crops.append(img[y - 96:y + 352, x - 96:x + 96])
     gap = np.full((crops[0].shape[0], 8, crops[0].shape[2]), 255, np.uint8)
@@ -129,7 +134,7 @@ def main():
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "edge_profile.png"))
     print("wrote", ", ".join(os.path.join(a.out, f) for f in
-                             ("chart_color-negative.png", "chart_no-remjet.png", "halation.png",
+                             ("chart_vision3-500t.png", "chart_no-remjet.png", "halation.png",
                               "edge_profile.png", "dye_vs_silver.png")))
 
 
