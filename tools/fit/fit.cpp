@@ -669,23 +669,19 @@ Status fit_stock(const sm::Datasheet& sheet, const FitOptions& options, FitResul
     if (options.start && options.start_cloud_ratio != 1.0)
         return Status::errorf("start_cloud_ratio sets the physical guess's clouds: a start "
                               "stock (--start) brings its own");
-    for (const auto& [name, spread] : options.light_spread) {
-        bool found = false;
-        for (const sm::LayerTargets& t : sheet.layers)
-            found = found || t.name == name;
-        if (!found)
+    const auto in_sheet = [&](const std::string& name) {
+        return std::any_of(sheet.layers.begin(), sheet.layers.end(),
+                           [&](const sm::LayerTargets& t) { return t.name == name; });
+    };
+    for (const auto& [name, spread] : options.light_spread)
+        if (!in_sheet(name))
             return Status::errorf("light spread for layer '", name, "', which is not in datasheet '",
                                   sheet.name, "'");
-    }
     if (!options.layers.empty() && !options.start)
         return Status::errorf("fitting only some layers needs a start stock (--start)");
-    for (const std::string& name : options.layers) {
-        bool found = false;
-        for (const sm::LayerTargets& t : sheet.layers)
-            found = found || t.name == name;
-        if (!found)
+    for (const std::string& name : options.layers)
+        if (!in_sheet(name))
             return Status::errorf("layer '", name, "' is not in datasheet '", sheet.name, "'");
-    }
     Stock stock;
     if (options.start) {
         stock = *options.start;
