@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "dye.h"
+#include "engine/path_cost.h"
 #include "grain_counts.h"
 #include "inhibition.h"
 #include "light_spread.h"
@@ -53,13 +54,6 @@ constexpr double kTableAreaQuantileZ = 3.0;
 /// a property of the scene, not of the pixels, so that a ROI render uses
 /// the same table, and draws the same grains, as the full frame.
 constexpr double kTableTopValue = 1.0;
-
-/// Largest mean absorbed photon count of a mean-sized grain that a render
-/// accepts (MODEL.md 2): about 2^33 times the count at the stock's grey
-/// point for the built-in stocks. Beyond it a render is refused: the exact
-/// chain costs one event per photon (~50 ns), and such values are most
-/// likely a broken pixel or a wrong exposure.
-constexpr double kMaxMeanPhotonsPerGrain = 1e10;
 
 /// The largest exposure value v of a layer over an input region, and where.
 struct RegionValues {
@@ -332,6 +326,37 @@ InputRegion input_region(const ImageView& input, const FrameGeometry& frame, con
 
 namespace {
 
+/// The largest grain radius any population of the stock generates (times
+/// its clouds' reach on a dye layer, MODEL.md 8): the margin around a region
+/// within which grains can reach into it.
+double max_radius_um(const Stock& stock, const SceneSettings& scene)
+{
+    double r = 0.0;
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
+            r = std::max(r, std::max(1.0, image_reach_factor(stock.layers[l]))
+                                * PopulationGrains(stock.layers[l].populations[p],
+                                                   grain_seed(scene), static_cast<uint32_t>(l),
+                                                   static_cast<uint32_t>(p))
+                                      .max_radius_um());
+    return r;
+}
+
+}  // namespace
+
+InputRegion read_region(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                        const FrameGeometry& frame, const Roi& roi)
+{
+    bool whole_frame = stock.inhibits();  // MODEL.md 10's blur: computed the same way
+    for (const Layer& layer : stock.layers)
+        whole_frame = whole_frame || layer.spreads_light();
+    if (whole_frame)
+        return InputRegion { 0, 0, input.frame_width(), input.frame_height() };
+    return input_region(input, frame, roi, 2.0 * max_radius_um(stock, scene));
+}
+
+namespace {
+
 /// What every chooser reads: the render's arguments and what follows from
 /// them alone.
 struct PlanContext {
@@ -351,6 +376,8 @@ struct PlanContext {
         , fast(settings_.engine == Engine::fast)
         , forced_table(settings_.kinetics.has_value() || settings_.scale == ScaleMethod::pixel)
         , development(stock_)
+        , region(read_region(stock_, scene_, input_, frame_, roi_))
+        , workers(parallel_workers(std::numeric_limits<int64_t>::max(), settings_.nthreads))
     {
     }
 
@@ -368,8 +395,26 @@ struct PlanContext {
     /// scale=pixel: built whatever it costs.
     bool forced_table;
     Development development;
+    /// The input pixels the render reads (read_region).
+    InputRegion region;
+    /// The render's worker threads (the cost estimates share work among
+    /// them).
+    int workers;
 
     bool cancelled() const { return cancel_requested(cancel); }
+    /// Film area of the whole scan and of the ROI, square micrometres, and
+    /// their pixels: choices compare costs over the whole scan (so that a
+    /// ROI decides as the full frame does); estimates are of the ROI.
+    double frame_area_um2() const { return frame.width_um * frame.height_um; }
+    double frame_pixels() const
+    {
+        return static_cast<double>(frame.scan_width) * static_cast<double>(frame.scan_height);
+    }
+    double roi_pixels() const { return static_cast<double>(roi.npixels()); }
+    double roi_area_um2() const
+    {
+        return roi_pixels() * frame.scan_pitch_x_um * frame.scan_pitch_y_um;
+    }
 };
 
 /// The smallest mean grain radius of a layer's populations.
@@ -388,6 +433,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0)
 
 // ---- Light spread and inhibition (MODEL.md 9, 10): the exposure every
 // later choice reads.
+
+/// Layer l's exposure value straight from the input (MODEL.md 2), before
+/// any spread.
+LayerExposure direct_exposure(const PlanContext& c, size_t l)
+{
+    const Layer& layer = c.stock.layers[l];
+    return LayerExposure(c.input, layer.sensitivity, c.frame.input_pitch_um,
+                         saturation_value(layer, c.lxs_per_value));
+}
 
 /// The spread exposure of every layer that spreads light (null for the
 /// others), one layer per worker, and the seconds each took; each is a pure
@@ -414,23 +468,26 @@ SpreadLight spread_light(const PlanContext& c)
         const size_t l     = spreading[static_cast<size_t>(i)];
         const Layer& layer = c.stock.layers[l];
         out.values[l]      = std::make_shared<const std::vector<float>>(spread_exposure(
-            layer, LayerExposure(c.input, layer.sensitivity, c.frame.input_pitch_um),
-            c.input.frame_width(), c.input.frame_height(), c.frame.input_pitch_um));
+            layer, direct_exposure(c, l), c.input.frame_width(), c.input.frame_height(),
+            c.frame.input_pitch_um));
         out.seconds[l] = seconds_since(t0);
     });
     return out;
 }
 
-/// Each layer's exposure value: the spread one, or the input's.
+/// Each layer's exposure value: the spread one, or the input's, both
+/// saturating at the layer's saturation_value (MODEL.md 2: the spread
+/// light of a saturated pixel is that of the clamped value, and the spread
+/// exposure saturates as the direct one does).
 std::vector<LayerExposure> layer_exposures(const PlanContext& c, const SpreadLight& spread)
 {
     std::vector<LayerExposure> exposures;
     for (size_t l = 0; l < c.stock.layers.size(); ++l)
         exposures.push_back(spread.values[l]
                                 ? LayerExposure(spread_view(*spread.values[l], c.input),
-                                                { 1.0, 0.0, 0.0 }, c.frame.input_pitch_um)
-                                : LayerExposure(c.input, c.stock.layers[l].sensitivity,
-                                                c.frame.input_pitch_um));
+                                                { 1.0, 0.0, 0.0 }, c.frame.input_pitch_um,
+                                                direct_exposure(c, l).max_value())
+                                : direct_exposure(c, l));
     return exposures;
 }
 
@@ -546,21 +603,24 @@ struct TableRequests {
 };
 
 /// Asks for a table for population p of layer l, whose region's largest
-/// exposure value is v_max.
+/// exposure value is v_max and whose exposure saturates at v_saturated.
 void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPlan& pp,
-                   double n_mean_area, double v_max, TableRequests& tables)
+                   double n_mean_area, double v_max, double v_saturated, TableRequests& tables)
 {
     const Population& pop = c.stock.layers[l].populations[p];
-    // What the frame's grains would cost without a table, at grey: their
-    // early-stopped chains, and the per-grain work the table saves. (The
-    // whole frame, and grey rather than the pixels: a ROI render must
-    // decide as the full frame does.) Not needed when the table is asked
-    // for explicitly.
+    // What the frame's grains would cost without a table, at grey (or at
+    // the saturated exposure, where grey lies past it: an exposure offset
+    // of many stops): their early-stopped chains, and the per-grain work
+    // the table saves. (The whole frame, and grey rather than the pixels:
+    // a ROI render must decide as the full frame does.) Not needed when
+    // the table is asked for explicitly.
+    const double pilot_value = std::min(kGreyValue, v_saturated);
     const double steps
         = c.forced_table
               ? 0.0
               : pop.grains_per_um2 * c.frame.width_um * c.frame.height_um
-                    * (early_stop_steps_per_grain(pop, pp.rates, pp.photons_per_value_um2 * kGreyValue,
+                    * (early_stop_steps_per_grain(pop, pp.rates,
+                                                  pp.photons_per_value_um2 * pilot_value,
                                                   c.scene.shutter_s, c.development,
                                                   hash_ids(grain_seed(c.scene), 0x9170, l, p))
                        + kTableSavedStepsPerGrain);
@@ -611,30 +671,36 @@ void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPla
 }
 
 /// The kinetics chooser, per population of layer l: the exact engine's
-/// chain, the early-stopped chain where no table can serve, else a table
-/// request (built or refused by build_tables). Refuses exposures past
-/// kMaxMeanPhotonsPerGrain. Its reasons go to plan.reason.
+/// chain; fog for a layer no light reaches (plan_unlit_layers); the
+/// early-stopped chain where no table can serve; else a table request
+/// (built or refused by build_tables). Whether light reaches the layer is
+/// read over the region the render reads (read_region), the same for
+/// every tile and, where the stock spreads light or inhibits, for every
+/// ROI. Its reasons go to plan.reason.
 Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableRequests& tables)
 {
     const Layer& layer = c.stock.layers[l];
     double n_mean_area = 0.0;
     for (size_t p = 0; p < plan.populations.size(); ++p)
         n_mean_area += layer.populations[p].grains_per_um2 * plan.populations[p].grains.mean_area_um2();
-    const RegionValues values
-        = region_values(plan.exposure, input_region(c.input, c.frame, c.roi, plan.margin_um));
+    const RegionValues values = region_values(plan.exposure, c.region);
+    const bool unlit          = !(values.max > 0.0);
+    if (c.settings.kinetics == KineticsMethod::fog && !unlit)
+        return Status::errorf("kinetics=fog: light reaches layer '", layer.name,
+                              "' (input pixel (", values.max_x, ", ", values.max_y,
+                              ") gives it an exposure of ",
+                              format_g(values.max * c.lxs_per_value),
+                              " lxs): fog alone decides only layers that no light reaches");
+    if (unlit && !c.exact && (!c.settings.kinetics || c.settings.kinetics == KineticsMethod::fog)) {
+        plan.unlit = true;
+        for (PopulationPlan& pp : plan.populations)
+            pp.kinetics = KineticsMethod::fog;
+        return {};
+    }
     std::ostringstream why;
     for (size_t p = 0; p < plan.populations.size(); ++p) {
         PopulationPlan& pp    = plan.populations[p];
         const Population& pop = layer.populations[p];
-        const double mean_grain_photons = pp.photons_per_value_um2 * pp.grains.mean_area_um2();
-        if (mean_grain_photons * values.max > kMaxMeanPhotonsPerGrain)
-            return Status::errorf(
-                "input pixel (", values.max_x, ", ", values.max_y, ") gives layer '", layer.name,
-                "' an exposure of ", format_g(values.max * c.lxs_per_value),
-                " lxs: ", format_g(mean_grain_photons * values.max),
-                " absorbed photons per mean grain (population ", p, "), above the limit of ",
-                format_g(kMaxMeanPhotonsPerGrain),
-                " (README, Limits and guarantees): lower exposure= or clamp the input");
         if (c.exact) {
             pp.kinetics = KineticsMethod::chain;
             continue;
@@ -649,14 +715,10 @@ Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableReq
                 << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
                    "so no table: the chain runs until each outcome is decided; ";
         }
-        if (want == KineticsMethod::table && values.max <= 0.0
-            && c.settings.scale != ScaleMethod::pixel) {
-            want = KineticsMethod::early_stop;
-            why << "population " << p << ": no light reaches it: fog only; ";
-        }
         pp.kinetics = want;
         if (want == KineticsMethod::table)
-            request_table(c, l, p, pp, n_mean_area, values.max, tables);
+            request_table(c, l, p, pp, n_mean_area, values.max, plan.exposure.max_value(),
+                          tables);
     }
     plan.reason = why.str();
     return {};
@@ -822,6 +884,91 @@ void choose_grains(const PlanContext& c, std::vector<LayerPlan>& out)
                 pp.fast = std::make_shared<const FastGrains>(pp.grains);
 }
 
+// ---- Layers no light reaches (MODEL.md 4 with n4 = 0: fog alone).
+
+/// Stream key of the fog's thinned grain processes (apart from the full
+/// processes' streams).
+constexpr uint64_t kFogGrainStream = 0xf06;
+
+/// A layer that no light reaches: every grain develops with probability f
+/// (MODEL.md 4: P = 1 - (1 - f)(1 - d)^0), independently, so its developed
+/// grains are the grain process thinned to f: a Poisson process of
+/// intensity f n with the same sizes, which each population here generates
+/// instead of the full one (every grain it generates develops; an
+/// inhibited layer keeps each with probability exp(-log factor), MODEL.md
+/// 10). Exact in distribution, at f times the grains. For the pixel scale
+/// (choose_scale compares its cost), P(develop | N) of the fog: a table of
+/// N <= 3, where the chain cannot build a 4-centre and P = f exactly, and
+/// its curve, exact at mean 0, the only exposure such a layer has.
+void plan_unlit_layers(const PlanContext& c, std::vector<LayerPlan>& out)
+{
+    std::shared_ptr<const DevelopTable> table;
+    std::shared_ptr<const DevelopCurve> curve;
+    const double f = c.development.fog_probability();
+    for (size_t l = 0; l < out.size(); ++l) {
+        LayerPlan& plan = out[l];
+        if (!plan.unlit)
+            continue;
+        if (!table) {
+            DevelopTable::Options fog;
+            fog.max_photons = 3;
+            fog.nthreads    = 1;
+            table = std::make_shared<const DevelopTable>(KineticsRates {}, c.scene.shutter_s,
+                                                         c.development, fog);
+            curve = std::make_shared<const DevelopCurve>(*table);
+        }
+        for (size_t p = 0; p < plan.populations.size(); ++p) {
+            PopulationPlan& pp = plan.populations[p];
+            Population thinned = c.stock.layers[l].populations[p];
+            thinned.grains_per_um2 *= f;
+            pp.grains = PopulationGrains(thinned, hash_ids(grain_seed(c.scene), kFogGrainStream),
+                                         static_cast<uint32_t>(l), static_cast<uint32_t>(p));
+            pp.table = table;
+            pp.curve = curve;
+            if (c.settings.grains != GrainMethod::exact)
+                pp.fast = std::make_shared<const FastGrains>(pp.grains);
+        }
+        std::ostringstream why;
+        why << "no light reaches the layer (every exposure value the render reads is 0; NaN and "
+               "negative values expose nothing): its grains develop by fog alone, P = f = "
+            << format_g(f)
+            << " each (MODEL.md 4), so only the developed ones are generated, the grain process "
+               "thinned to f (exact in distribution); ";
+        plan.reason += why.str();
+    }
+}
+
+/// Grains a layer's per-grain path generates per square micrometre: the
+/// fog's thinned processes for a layer no light reaches, else every grain.
+double generated_grains_per_um2(const PlanContext& c, size_t l, const LayerPlan& plan)
+{
+    double n = 0.0;
+    for (const Population& pop : c.stock.layers[l].populations)
+        n += pop.grains_per_um2;
+    return plan.unlit ? n * c.development.fog_probability() : n;
+}
+
+/// Estimated seconds of a layer's tiles grain by grain over `area_um2` and
+/// `pixels` (engine/path_cost.h).
+double grain_path_seconds(const PlanContext& c, size_t l, const LayerPlan& plan,
+                          double area_um2, double pixels)
+{
+    const bool fast = std::all_of(plan.populations.begin(), plan.populations.end(),
+                                  [](const PopulationPlan& pp) { return pp.fast != nullptr; });
+    const double grains = generated_grains_per_um2(c, l, plan) * area_um2;
+    const double per_grain = plan.unlit ? path_cost::kFogGrainSeconds
+                             : fast     ? path_cost::kFastGrainSeconds
+                                        : path_cost::kExactGrainSeconds;
+    return path_cost::shared_seconds(grains, per_grain, c.workers)
+           + path_cost::shared_seconds(pixels, path_cost::kGrainPixelSeconds, c.workers);
+}
+
+/// Estimated seconds of a layer's tiles at pixel scale over `pixels`.
+double pixel_path_seconds(const PlanContext& c, double pixels)
+{
+    return path_cost::shared_seconds(pixels, path_cost::kPixelSeconds, c.workers);
+}
+
 // ---- The developed grains' image (MODEL.md 5, 8).
 
 /// Dye layers (MODEL.md 8): their image is the mean of 10^-D over each
@@ -891,6 +1038,26 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         const std::optional<ScaleMethod>& asked = c.settings.scale;
         if (asked == ScaleMethod::grain || (!asked && !curves))
             continue;
+        // A layer no light reaches: its fog grains are exact and cost in
+        // proportion to the few that develop; the pixel scale is taken
+        // only where it is estimated cheaper over the whole scan (with
+        // its model's build), the same for every ROI.
+        if (plan.unlit && !asked) {
+            const double grains_s = grain_path_seconds(c, l, plan, c.frame_area_um2(),
+                                                       c.frame_pixels());
+            const double pixel_s  = path_cost::kPixelModelSeconds
+                                   + pixel_path_seconds(c, c.frame_pixels());
+            std::ostringstream cost;
+            cost << "whole scan estimated " << format_g(grains_s) << " s grain by grain (the "
+                 << "fog's grains), " << format_g(pixel_s) << " s at pixel scale (with its "
+                 << "model's build): ";
+            if (grains_s <= pixel_s) {
+                plan.reason += cost.str() + "grain by grain; ";
+                continue;
+            }
+            plan.reason += cost.str() + "the pixel scale where its statistics describe the "
+                                        "layer; ";
+        }
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
                                   "' needs P(develop | mean photons) for every population, which "
@@ -1035,12 +1202,14 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
                                    [&](const PopulationPlan& pp) { return pp.exposure != exposure; });
     if (plan.populations.front().fast)
         path << " grains=fast";
-    path << " exposure=";
-    if (mixed)  // per population, as kinetics
-        for (size_t p = 0; p < plan.populations.size(); ++p)
-            path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
-    else
-        path << exposure_method_name(exposure);
+    if (!plan.unlit) {  // a layer no light reaches reads no exposure
+        path << " exposure=";
+        if (mixed)  // per population, as kinetics
+            for (size_t p = 0; p < plan.populations.size(); ++p)
+                path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
+        else
+            path << exposure_method_name(exposure);
+    }
     if (plan.dye_samples == 0)  // a dye layer's image is above, not a coverage
         path << " coverage=" << coverage_method_name(plan.coverage);
     if (plan.dye_samples == 0
@@ -1051,11 +1220,12 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
             << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
         return;
     }
-    if (exposure == ExposureMethod::centre || mixed)
+    // A layer no light reaches reads no exposure.
+    if (!plan.unlit && (exposure == ExposureMethod::centre || mixed))
         why << "exposure sampled at grain centres"
             << (mixed ? " for the populations above marked so" : "")
             << " (error at image edges, measured in docs/); ";
-    if (exposure == ExposureMethod::disc
+    if (!plan.unlit && exposure == ExposureMethod::disc
         && std::any_of(plan.populations.begin(), plan.populations.end(),
                        [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
         why << "exposure integrated over each grain's disc (the kernel's: segment "
@@ -1082,7 +1252,7 @@ void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vecto
         std::ostringstream path, why;
         describe_layer_image(c, l, plan, inhibition, path, why);
         if (plan.pixel_model) {
-            path << "scale=pixel kinetics=curve exposure=box";
+            path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve exposure=box");
             plan.path   = path.str();
             plan.reason = why.str() + plan.reason;
             continue;
@@ -1126,6 +1296,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     if (Status s = build_tables(c, tables); !s)
         return s;
     const std::vector<double> kinetics_bound = attach_tables(c, tables, out);
+    plan_unlit_layers(c, out);
     choose_grains(c, out);
     choose_dye_image(c, out);
     // The pixel scale first: a layer drawn from its pixel statistics has
@@ -1133,6 +1304,10 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     if (Status s = choose_scale(c, inhibition, out); !s)
         return s;
     choose_raster(c, kinetics_bound, out);
+    for (size_t l = 0; l < out.size(); ++l)
+        out[l].estimated_seconds
+            = out[l].pixel_model ? pixel_path_seconds(c, c.roi_pixels())
+                                 : grain_path_seconds(c, l, out[l], c.roi_area_um2(), c.roi_pixels());
     describe(c, inhibition, out);
     return {};
 }

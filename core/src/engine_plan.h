@@ -70,6 +70,12 @@ struct LayerPlan {
     /// image (0: silver, whose coverage method is above).
     double image_reach = 1.0;
     int dye_samples    = 0;
+    /// The seconds its tiles are estimated to take over the rendered region
+    /// on the render's workers (engine/path_cost.h), for the statistics.
+    double estimated_seconds = 0.0;
+    /// No light reaches the layer anywhere in the region the render reads
+    /// (read_region): its grains develop by fog alone (KineticsMethod::fog).
+    bool unlit = false;
 };
 
 /// Empties the process's cache of pixel models (plan_layers builds a
@@ -94,5 +100,15 @@ struct InputRegion {
 };
 InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
                          double margin_um);
+
+/// The input pixels a render of `roi` reads: the ROI's film rectangle
+/// grown by the largest grain's diameter (a grain that touches the ROI
+/// integrates its exposure over its disc), or the whole frame when a layer
+/// spreads light or inhibition acts (MODEL.md 9, 10: the spread exposure
+/// and the blurred densities are computed over the whole frame, so that a
+/// ROI reads exactly the values a full render does). The planner's choices
+/// that look at the pixels (whether light reaches a layer) look at these.
+InputRegion read_region(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                        const FrameGeometry& frame, const Roi& roi);
 
 }  // namespace filmgrain

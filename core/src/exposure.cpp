@@ -1,8 +1,11 @@
 // MODEL.md section 2: exposure.
 #include "exposure.h"
 
+#include "geometry.h"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace filmgrain {
@@ -61,12 +64,24 @@ double disc_rect_area_um2(double cx_um, double cy_um, double r_um, double x0_um,
     return std::max(0.0, area);
 }
 
+double saturation_value(const Layer& layer, double lxs_per_value)
+{
+    double photons_per_value = 0.0;  // of a mean-sized grain, the largest
+    for (const Population& pop : layer.populations)
+        photons_per_value
+            = std::max(photons_per_value, pop.quantum_efficiency * kPhotonsPerUm2PerLxs
+                                              * lxs_per_value * mean_disc_area_um2(pop));
+    return photons_per_value > 0.0 ? kMaxMeanPhotonsPerGrain / photons_per_value
+                                   : std::numeric_limits<double>::infinity();
+}
+
 LayerExposure::LayerExposure(const ImageView& input, const std::array<double, 3>& sensitivity,
-                             double input_pitch_um)
+                             double input_pitch_um, double max_value)
     : m_input(input)
     , m_sensitivity(sensitivity)
     , m_grey_weight(sensitivity[0] + sensitivity[1] + sensitivity[2])
     , m_pitch_um(input_pitch_um)
+    , m_max_value(max_value)
 {
 }
 

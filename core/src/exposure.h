@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "filmgrain/image.h"
 #include "filmgrain/stock.h"
@@ -20,6 +21,22 @@ inline constexpr double kGreyValue = 0.18;
 /// H = v / 0.18 * exposure_at_grey_lxs * 2^stops.
 double exposure_lxs_per_unit_value(double exposure_at_grey_lxs, double exposure_stops);
 
+/// The largest exposure the kinetics represent (MODEL.md 2, extremes), as
+/// the mean absorbed photons of a mean-sized grain of a layer's most
+/// sensitive population: about 2^33 times the count at the built-in
+/// stocks' grey point, where every grain but the very smallest develops.
+/// Brighter values (+Inf included) are clamped to it: the light saturates.
+/// (The early-stopped chain decides such a grain within its first few
+/// hundred events; the photons it never reaches cost nothing.)
+inline constexpr double kMaxMeanPhotonsPerGrain = 1e10;
+
+/// The exposure value v at which a layer saturates: kMaxMeanPhotonsPerGrain
+/// over the largest mean absorbed photons per unit value of a mean-sized
+/// grain of its populations (quantum_efficiency * 4.09e3 * H per unit
+/// value * mean disc area, MODEL.md 2), for `lxs_per_value` lux-seconds a
+/// unit of value. +Inf for a layer whose grains absorb nothing.
+double saturation_value(const Layer& layer, double lxs_per_value);
+
 /// Exact area of the intersection of the disc (centre cx, cy; radius r) with
 /// the rectangle [x0, x1] x [y0, y1], all in micrometres. Closed form (the
 /// signed quadrant function of the disc at the four corners).
@@ -27,32 +44,33 @@ double disc_rect_area_um2(double cx_um, double cy_um, double r_um, double x0_um,
                           double x1_um, double y1_um);
 
 /// The exposure value v of one layer over the input image (MODEL.md 2):
-/// v = dot(sensitivity, rgb); a grey input y is rgb = (y, y, y). A pixel
-/// with a non-finite channel (NaN, +-Inf) has v = 0, and negative v is
-/// clamped to 0: there is no negative light. Outside the image v = 0.
-/// Thread safety: const, shareable; holds a view, not a copy.
+/// v = dot(sensitivity, rgb); a grey input y is rgb = (y, y, y). The
+/// extremes (MODEL.md 2): a pixel with a NaN channel has v = 0 (it exposes
+/// nothing); a channel of +-Inf counts only where its weight is not 0;
+/// negative v is 0 (there is no negative light); v above `max_value`
+/// (saturation_value), +Inf included, is max_value: the light saturates.
+/// Outside the image v = 0. Thread safety: const, shareable; holds a view,
+/// not a copy.
 class LayerExposure {
 public:
     LayerExposure(const ImageView& input, const std::array<double, 3>& sensitivity,
-                  double input_pitch_um);
+                  double input_pitch_um, double max_value);
 
     /// v of input pixel (ix, iy) (whole-image coordinates), which must lie
     /// inside the view's window.
     double value(int64_t ix, int64_t iy) const
     {
-        const float* p = m_input.pixel(ix, iy);
-        double v;
-        if (m_input.channels < 3) {
-            if (!std::isfinite(p[0]))
-                return 0.0;
-            v = m_grey_weight * p[0];
-        } else {
-            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-                return 0.0;
-            v = m_sensitivity[0] * p[0] + m_sensitivity[1] * p[1] + m_sensitivity[2] * p[2];
-        }
-        return v > 0.0 ? v : 0.0;
+        const double v = weighted_sum(ix, iy);
+        if (!(v > 0.0))  // NaN, negative or zero
+            return 0.0;
+        return v < m_max_value ? v : m_max_value;
     }
+
+    /// Whether input pixel (ix, iy) saturates: v reaches max_value.
+    bool saturates(int64_t ix, int64_t iy) const { return weighted_sum(ix, iy) >= m_max_value; }
+
+    /// The value at which the layer saturates.
+    double max_value() const { return m_max_value; }
 
     /// Integral of v over the disc, value x square micrometres, against the
     /// box-reconstructed image (exact up to rounding).
@@ -67,10 +85,28 @@ public:
     double mean_over_rect(double x0_um, double y0_um, double x1_um, double y1_um) const;
 
 private:
+    /// dot(sensitivity, rgb) of a pixel, unclamped: NaN where a channel is
+    /// NaN, channels of weight 0 left out (0 x Inf is not NaN here).
+    double weighted_sum(int64_t ix, int64_t iy) const
+    {
+        const float* p = m_input.pixel(ix, iy);
+        if (m_input.channels < 3)
+            return m_grey_weight == 0.0 ? (std::isnan(p[0]) ? p[0] : 0.0)
+                                        : m_grey_weight * p[0];
+        if (std::isnan(p[0]) || std::isnan(p[1]) || std::isnan(p[2]))
+            return std::numeric_limits<double>::quiet_NaN();
+        double v = 0.0;
+        for (int c = 0; c < 3; ++c)
+            if (m_sensitivity[c] != 0.0)
+                v += m_sensitivity[c] * p[c];
+        return v;
+    }
+
     ImageView m_input;
     std::array<double, 3> m_sensitivity;
     double m_grey_weight;
     double m_pitch_um;
+    double m_max_value;
 };
 
 }  // namespace filmgrain

@@ -55,7 +55,7 @@ TEST(LayerExposure, IntegratesAgainstTheBoxImage)
         for (int x = 0; x < 4; ++x)
             px[y * 4 + x] = static_cast<float>(x + 1);
     const ImageView view { px.data(), 4, 3, 1 };
-    const LayerExposure ex(view, { 1.0, 0.0, 0.0 }, 10.0);
+    const LayerExposure ex(view, { 1.0, 0.0, 0.0 }, 10.0, 1e30);
     // Inside one pixel: value * pi r^2.
     EXPECT_NEAR(ex.integrate_over_disc(15, 15, 2), 2 * M_PI * 4, 1e-12);
     // Straddling columns 1 and 2 at x = 20: half the disc each.
@@ -68,21 +68,52 @@ TEST(LayerExposure, IntegratesAgainstTheBoxImage)
     EXPECT_NEAR(ex.integrate_over_disc(20, 15, 1000), (1 + 2 + 3 + 4) * 3 * 100.0, 1e-6);
 }
 
-TEST(LayerExposure, SpecialValuesGiveZeroExposure)
+TEST(LayerExposure, SpecialValuesExposeNothingOrSaturate)
 {
+    // MODEL.md 2, extremes: NaN and negative light expose nothing; +Inf and
+    // values past the layer's saturation value are clamped to it; a
+    // channel the layer does not read (weight 0) does not count, +-Inf
+    // included.
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
-    std::vector<float> rgb = { nan, 1, 1, inf, 1, 1, -2, 1, 1, 0.5f, 0.25f, 1 };
-    const ImageView view { rgb.data(), 4, 1, 3 };
-    const LayerExposure ex(view, { 1.0, 1.0, 0.0 }, 1.0);
+    std::vector<float> rgb = { nan, 1,   1, inf, 1, 1, -2,   1, 1, 0.5f, 0.25f, 1,
+                               -inf, 1, 1, 0,   0, inf, 3e6f, 0, 0, inf, -inf, 0 };
+    const ImageView view { rgb.data(), 8, 1, 3 };
+    const LayerExposure ex(view, { 1.0, 1.0, 0.0 }, 1.0, 1e6);
     EXPECT_EQ(ex.value(0, 0), 0.0);   // NaN channel
-    EXPECT_EQ(ex.value(1, 0), 0.0);   // Inf channel
+    EXPECT_EQ(ex.value(1, 0), 1e6);   // +Inf: saturates
+    EXPECT_TRUE(ex.saturates(1, 0));
     EXPECT_EQ(ex.value(2, 0), 0.0);   // v = -1: no negative light
     EXPECT_EQ(ex.value(3, 0), 0.75);  // dot(sensitivity, rgb)
+    EXPECT_FALSE(ex.saturates(3, 0));
+    EXPECT_EQ(ex.value(4, 0), 0.0);   // -Inf: no light
+    EXPECT_EQ(ex.value(5, 0), 0.0);   // +Inf in blue, which the layer does not read
+    EXPECT_FALSE(ex.saturates(5, 0));
+    EXPECT_EQ(ex.value(6, 0), 1e6);   // past the saturation value
+    EXPECT_EQ(ex.value(7, 0), 0.0);   // +Inf - Inf: no defined light
     // Grey input is read as (y, y, y).
-    std::vector<float> grey = { 0.5f };
-    const LayerExposure eg(ImageView { grey.data(), 1, 1, 1 }, { 0.2, 0.3, 0.4 }, 1.0);
+    std::vector<float> grey = { 0.5f, inf };
+    const LayerExposure eg(ImageView { grey.data(), 2, 1, 1 }, { 0.2, 0.3, 0.4 }, 1.0, 1e6);
     EXPECT_NEAR(eg.value(0, 0), 0.45, 1e-7);
+    EXPECT_EQ(eg.value(1, 0), 1e6);
+}
+
+TEST(LayerExposure, SaturationIsTheLargestMeanPhotonCountTheKineticsRepresent)
+{
+    // A layer saturates where a mean-sized grain of its most sensitive
+    // population absorbs kMaxMeanPhotonsPerGrain on average (MODEL.md 2).
+    Layer layer;
+    Population a, b;
+    a.diameter_um = 1.0;
+    a.diameter_log_sigma = 0.0;
+    a.quantum_efficiency = 0.1;
+    b = a;
+    b.diameter_um = 2.0;  // four times the area: the most sensitive
+    layer.populations = { a, b };
+    const double lxs_per_value = 0.5;
+    const double per_value = 0.1 * kPhotonsPerUm2PerLxs * lxs_per_value * M_PI;  // b: area pi
+    EXPECT_NEAR(saturation_value(layer, lxs_per_value) * per_value, kMaxMeanPhotonsPerGrain,
+                1e-6 * kMaxMeanPhotonsPerGrain);
 }
 
 }  // namespace

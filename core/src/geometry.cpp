@@ -63,9 +63,13 @@ PopulationGrains::PopulationGrains(const Population& pop, uint64_t seed, uint32_
     const double s   = pop.diameter_log_sigma;
     m_log_sigma      = s;
     m_log_median_um  = log_median_diameter_um(pop);
-    m_mean_area_um2  = M_PI / 4.0 * pop.diameter_um * pop.diameter_um * std::exp(s * s);
+    m_mean_area_um2  = mean_disc_area_um2(pop);
     m_key            = hash_ids(seed, layer_index, population_index);
     const double lam = pop.grains_per_um2;
+    // A process of no grains (a population thinned to nothing, e.g. to a
+    // fog probability of 0) has no bins: it visits no cell.
+    if (!(lam > 0.0))
+        return;
 
     const auto add_bin   = [&](double z_lo, double z_hi, double probability) {
         m_bins.push_back(Bin { z_lo, z_hi, lam * probability, radius_at_z_um(z_hi),

@@ -68,6 +68,12 @@ inline double diameter_at_z_um(const Population& pop, double z)
 {
     return std::exp(log_median_diameter_um(pop) + pop.diameter_log_sigma * z);
 }
+/// MODEL.md 1: the mean disc area a_mean = pi/4 diameter_um^2 exp(s^2).
+inline double mean_disc_area_um2(const Population& pop)
+{
+    const double s = pop.diameter_log_sigma;
+    return M_PI / 4.0 * pop.diameter_um * pop.diameter_um * std::exp(s * s);
+}
 
 /// The grain process of one population, generated procedurally per film
 /// cell. A population's disc diameters are lognormal: ln d ~ Normal(ln
@@ -81,7 +87,9 @@ inline double diameter_at_z_um(const Population& pop, double z)
 /// resolution (a frame of 1e12 grains misses one with probability 1e-7).
 ///
 /// Grains of a cell are a pure function of (seed, layer, population, bin,
-/// cell): never of tile, ROI or thread. Thread safety: const, shareable.
+/// cell): never of tile, ROI or thread. A population of grains_per_um2 0
+/// (only ever made by thinning one, as the fog path does) has no bins and
+/// no grains. Thread safety: const, shareable.
 class PopulationGrains {
 public:
     PopulationGrains(const Population& pop, uint64_t seed, uint32_t layer_index,

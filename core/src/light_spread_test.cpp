@@ -4,6 +4,7 @@
 #include "light_spread.h"
 
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -117,8 +118,10 @@ std::vector<float> spread(const Layer& layer, const std::vector<float>& img, int
                           double pitch_um)
 {
     const ImageView view { img.data(), w, h, 1 };
-    return spread_exposure(layer, LayerExposure(view, { 1.0, 0.0, 0.0 }, pitch_um), w, h,
-                           pitch_um);
+    return spread_exposure(layer,
+                           LayerExposure(view, { 1.0, 0.0, 0.0 }, pitch_um,
+                                         std::numeric_limits<double>::infinity()),
+                           w, h, pitch_um);
 }
 
 TEST(LightSpread, ScatterMovesLightAndHalationAddsItsFraction)

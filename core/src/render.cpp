@@ -13,6 +13,7 @@
 #include <functional>
 
 #include "engine_plan.h"
+#include "exposure.h"
 #include "geometry.h"
 #include "image_formation.h"
 #include "parallel.h"
@@ -22,60 +23,35 @@ namespace filmgrain {
 
 namespace {
 
-/// Counts the special input pixels the render reads.
-InputStats scan_input(const ImageView& input, const InputRegion& r)
+/// Counts the special input pixels the render reads; `direct`: each
+/// layer's exposure straight from the input (saturated pixels, MODEL.md 2).
+InputStats scan_input(const ImageView& input, const InputRegion& r,
+                      const std::vector<LayerExposure>& direct)
 {
     InputStats s;
     const int nc = std::min(input.channels, 3);
     for (int64_t y = r.y0; y < r.y1; ++y)
         for (int64_t x = r.x0; x < r.x1; ++x) {
             const float* px = input.pixel(x, y);
-            bool nonfinite = false, negative = false, denormal = false;
+            bool nonfinite = false, nan = false, negative = false, denormal = false;
             for (int c = 0; c < nc; ++c) {
                 nonfinite |= !std::isfinite(px[c]);
+                nan |= std::isnan(px[c]);
                 negative |= px[c] < 0.0f;
                 denormal |= std::fpclassify(px[c]) == FP_SUBNORMAL;
             }
+            bool saturated = false;
+            for (const LayerExposure& e : direct)
+                saturated |= e.saturates(x, y);
             s.nonfinite_pixels += nonfinite;
+            s.nan_pixels += nan;
+            s.saturated_pixels += saturated;
             s.negative_pixels += negative && !nonfinite;
             s.denormal_pixels += denormal && !nonfinite;
         }
     s.pixels_read = static_cast<uint64_t>(std::max<int64_t>(0, r.x1 - r.x0))
                     * static_cast<uint64_t>(std::max<int64_t>(0, r.y1 - r.y0));
     return s;
-}
-
-/// The largest grain radius any population of the stock generates (times
-/// its clouds' reach on a dye layer, MODEL.md 8): the margin around a region
-/// within which grains can reach into it.
-double max_radius_um(const Stock& stock, const SceneSettings& scene)
-{
-    double r = 0.0;
-    for (size_t l = 0; l < stock.layers.size(); ++l)
-        for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
-            r = std::max(r, std::max(1.0, image_reach_factor(stock.layers[l]))
-                                * PopulationGrains(stock.layers[l].populations[p],
-                                                   grain_seed(scene), static_cast<uint32_t>(l),
-                                                   static_cast<uint32_t>(p))
-                                      .max_radius_um());
-    return r;
-}
-
-/// The input pixels a render of `roi` reads: the ROI's film rectangle
-/// grown by the largest grain's diameter (a grain that touches the ROI
-/// integrates its exposure over its disc), or the whole frame when a layer
-/// spreads light or inhibition acts (MODEL.md 9, 10: the spread exposure
-/// and the blurred densities are computed over the whole frame, so that a
-/// ROI reads exactly the values a full render does).
-InputRegion read_region(const Stock& stock, const SceneSettings& scene, const ImageView& input,
-                        const FrameGeometry& frame, const Roi& roi)
-{
-    bool whole_frame = stock.inhibits();  // MODEL.md 10's blur: computed the same way
-    for (const Layer& layer : stock.layers)
-        whole_frame = whole_frame || layer.spreads_light();
-    if (whole_frame)
-        return InputRegion { 0, 0, input.frame_width(), input.frame_height() };
-    return input_region(input, frame, roi, 2.0 * max_radius_um(stock, scene));
 }
 
 Status validate_request(const Stock& stock, const SceneSettings& scene, const ImageView& input,
@@ -253,7 +229,11 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (stats) {
             renderer.fill_stats(*stats);
             stats->engine = engine_name(settings.engine);
-            stats->input = scan_input(input, need);
+            std::vector<LayerExposure> direct;
+            for (size_t l = 0; l < stock.layers.size(); ++l)
+                direct.emplace_back(input, stock.layers[l].sensitivity, frame.input_pitch_um,
+                                    plan[l].exposure.max_value());
+            stats->input = scan_input(input, need, direct);
             stats->simulate_seconds
                 = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         }

@@ -288,16 +288,19 @@ TEST(Render, ScanResolutionIsIndependentOfInputResolution)
     EXPECT_EQ(out.size(), 96u * 64u * 3u);
 }
 
-TEST(Render, NonFiniteAndNegativePixelsAreZeroExposureAndCounted)
+TEST(Render, SpecialPixelsAreCounted)
 {
     TestScene s = small_scene();
     s.pixels[0] = std::numeric_limits<float>::quiet_NaN();
     s.pixels[4] = std::numeric_limits<float>::infinity();
     s.pixels[9]  = -1.0f;
     s.pixels[13] = std::numeric_limits<float>::denorm_min();
+    s.pixels[20] = 1e37f;
     RenderStats stats;
     const auto out = render_scene(s, {}, &stats);
     EXPECT_EQ(stats.input.nonfinite_pixels, 2u);
+    EXPECT_EQ(stats.input.nan_pixels, 1u);
+    EXPECT_EQ(stats.input.saturated_pixels, 2u);  // +Inf and 1e37
     EXPECT_EQ(stats.input.negative_pixels, 1u);
     EXPECT_EQ(stats.input.denormal_pixels, 1u);
     EXPECT_EQ(stats.input.pixels_read, 48u * 32u);
@@ -305,21 +308,168 @@ TEST(Render, NonFiniteAndNegativePixelsAreZeroExposureAndCounted)
         EXPECT_TRUE(std::isfinite(v));
 }
 
+TEST(Render, InfiniteAndHugeValuesSaturate)
+{
+    // MODEL.md 2, extremes: a block of +Inf (and one of 1e37) in a grey
+    // frame saturates: every grain it reaches develops (but the very
+    // smallest), so the block is denser than the grey around it, in every
+    // layer and engine, where a clear hole once printed. NaN and -Inf
+    // expose nothing: a block of them is the fog's, below the grey.
+    TestScene s = small_scene();
+    std::fill(s.pixels.begin(), s.pixels.end(), 0.18f);
+    const auto fill_block = [&](int x0, float v) {
+        for (int y = 12; y < 20; ++y)
+            for (int x = x0; x < x0 + 8; ++x)
+                for (int c = 0; c < 3; ++c)
+                    s.pixels[static_cast<size_t>((y * 48 + x) * 3 + c)] = v;
+    };
+    fill_block(4, std::numeric_limits<float>::infinity());
+    fill_block(20, 1e37f);
+    fill_block(36, std::numeric_limits<float>::quiet_NaN());
+    const auto block_mean = [](const std::vector<float>& d, int x0, size_t l) {
+        double sum = 0.0;  // the block's inner 4x4 pixels (no edge light)
+        for (int y = 14; y < 18; ++y)
+            for (int x = x0 + 2; x < x0 + 6; ++x)
+                sum += d[static_cast<size_t>(y * 48 + x) * 3 + l];
+        return sum / 16.0;
+    };
+    for (Engine engine : { Engine::exact, Engine::automatic, Engine::fast }) {
+        RenderSettings settings;
+        settings.engine = engine;
+        RenderStats stats;
+        const std::vector<float> d = render_scene(s, settings, &stats);
+        EXPECT_EQ(stats.input.saturated_pixels, 128u);
+        EXPECT_EQ(stats.input.nan_pixels, 64u);
+        for (float v : d)
+            ASSERT_TRUE(std::isfinite(v));
+        for (size_t l = 0; l < 3; ++l) {
+            const double grey = block_mean(d, 28, l);  // between the blocks
+            // Saturated: the density clamp's neighbourhood, far above grey
+            // (the colour preset's grey is ~0.8 above base, its shoulder
+            // ~2.5: 0.5 is many times the noise of a 16-pixel mean).
+            EXPECT_GT(block_mean(d, 4, l), grey + 0.5) << engine_name(engine) << " " << l;
+            EXPECT_GT(block_mean(d, 20, l), grey + 0.5) << engine_name(engine) << " " << l;
+            EXPECT_LT(block_mean(d, 36, l), grey - 0.3) << engine_name(engine) << " " << l;
+        }
+    }
+}
+
 TEST(Render, ZeroExposureDevelopsFogOnly)
 {
-    // A black frame: only fog develops, so the developed fraction is f.
+    // A black frame: every grain develops with the fog probability f alone
+    // (MODEL.md 4 with n4 = 0). The exact engine draws every grain: its
+    // developed fraction is Binomial(grains, f). auto and fast generate the
+    // fog's thinned process (KineticsMethod::fog): every grain they count
+    // develops, and their count over the frame is Poisson with mean
+    // f sum_p n_p x area. 5 sigma each.
     TestScene s = small_scene();
     std::fill(s.pixels.begin(), s.pixels.end(), 0.0f);
-    RenderStats stats;
-    render_scene(s, {}, &stats);
     const double f = 1 - std::exp(-s.stock.development_time_s / s.stock.fog_tau_s);
-    for (const auto& l : stats.layers) {
-        EXPECT_EQ(l.absorbed_photons, 0u);
-        EXPECT_EQ(l.kinetics_events, 0u);
-        // Binomial(grains, f): 5 sigma.
-        const double n = static_cast<double>(l.grains);
-        EXPECT_NEAR(l.developed / n, f, 5 * std::sqrt(f * (1 - f) / n));
+    ScanGeometry scan;
+    ASSERT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, {}, scan));
+    const double area_um2 = scan.frame_width_um * scan.frame_height_um;
+    for (Engine engine : { Engine::exact, Engine::automatic, Engine::fast }) {
+        RenderSettings settings;
+        settings.engine = engine;
+        RenderStats stats;
+        render_scene(s, settings, &stats);
+        for (size_t l = 0; l < stats.layers.size(); ++l) {
+            const LayerStats& ls = stats.layers[l];
+            EXPECT_EQ(ls.absorbed_photons, 0u);
+            EXPECT_EQ(ls.kinetics_events, 0u);
+            const double n = static_cast<double>(ls.grains);
+            if (engine == Engine::exact) {
+                EXPECT_NEAR(ls.developed / n, f, 5 * std::sqrt(f * (1 - f) / n));
+                continue;
+            }
+            EXPECT_NE(ls.path.find("kinetics=fog"), std::string::npos) << ls.path;
+            EXPECT_EQ(ls.developed, ls.grains);
+            EXPECT_EQ(ls.error_estimate == 0.0, ls.path.find("raster") == std::string::npos);
+            double mean = 0.0;
+            for (const Population& pop : s.stock.layers[l].populations)
+                mean += f * pop.grains_per_um2 * area_um2;
+            EXPECT_NEAR(n, mean, 5 * std::sqrt(mean)) << engine_name(engine);
+        }
     }
+    // The fog path's grains are a pure function of their cells: threads,
+    // tiles and ROI give the same bits.
+    expect_deterministic(s, Engine::automatic, Roi { 13, 5, 40, 22 });
+    expect_deterministic(s, Engine::fast, Roi { 13, 5, 40, 22 });
+}
+
+TEST(Render, UnlitLayersAgreeWithTheExactEngine)
+{
+    // A frame lit in green only (red 0, blue negative), on the colour
+    // preset with each layer reading only its own channel and interimage
+    // inhibition (MODEL.md 10): R and B receive no light, and the
+    // developing G layer inhibits R's fog. The fog path (and its pixel scale, forced)
+    // must draw the exact engine's distribution: per layer, the frame's
+    // mean transmittance agrees within 5 standard errors of the difference,
+    // each side's from the spread of 8x8-pixel block means (blocks far
+    // wider than the grains and the 10 um inhibitor blur: nearly
+    // independent).
+    TestScene s = small_scene();
+    for (size_t i = 0; i < s.pixels.size(); i += 3) {
+        s.pixels[i]     = 0.0f;
+        s.pixels[i + 2] = -1.0f;
+    }
+    s.stock.layers[0].sensitivity = { 1.0, 0.0, 0.0 };
+    s.stock.layers[1].sensitivity = { 0.0, 1.0, 0.0 };
+    s.stock.layers[2].sensitivity = { 0.0, 0.0, 1.0 };
+    s.stock.inhibition.assign(3, std::vector<double>(3, 0.0));
+    s.stock.inhibition[0][1]       = 2.0;  // G inhibits R
+    s.stock.inhibitor_diffusion_um = 10.0;
+    const auto block_means = [&](const std::vector<float>& d, size_t l) {
+        std::vector<double> means;
+        const size_t nl = 3, w = 48, h = 32;
+        for (size_t by = 0; by < h; by += 8)
+            for (size_t bx = 0; bx < w; bx += 8) {
+                double sum = 0.0;
+                for (size_t y = by; y < by + 8; ++y)
+                    for (size_t x = bx; x < bx + 8; ++x)
+                        sum += std::pow(10.0, -(d[(y * w + x) * nl + l]
+                                                - s.stock.layer_base_density(l)));
+                means.push_back(sum / 64.0);
+            }
+        return mean_and_standard_error(means);
+    };
+    RenderSettings exact;
+    exact.engine = Engine::exact;
+    RenderSettings pixel;
+    pixel.scale = ScaleMethod::pixel;
+    const std::vector<float> reference = render_scene(s, exact);
+    for (const RenderSettings& settings : { RenderSettings {}, pixel }) {
+        RenderStats stats;
+        const std::vector<float> d = render_scene(s, settings, &stats);
+        for (size_t l : { size_t(0), size_t(2) }) {
+            EXPECT_NE(stats.layers[l].path.find("kinetics=fog"), std::string::npos)
+                << stats.layers[l].path;
+            const auto [m_ref, se_ref] = block_means(reference, l);
+            const auto [m, se]         = block_means(d, l);
+            EXPECT_NEAR(m, m_ref, 5 * std::hypot(se, se_ref))
+                << s.stock.layers[l].name << " " << stats.layers[l].path;
+        }
+        EXPECT_EQ(stats.layers[1].path.find("kinetics=fog"), std::string::npos);
+    }
+    // R's fog is inhibited: without the G layer's development it is
+    // denser (the test would not see a fog path that ignored inhibition).
+    TestScene uninhibited = s;
+    uninhibited.stock.inhibition[0][1] = 0.0;
+    const auto [m_inhibited, se_inhibited] = block_means(reference, 0);
+    const auto [m_free, se_free] = block_means(render_scene(uninhibited, exact), 0);
+    EXPECT_GT(m_inhibited - m_free, 8 * std::hypot(se_inhibited, se_free));
+}
+
+TEST(Render, KineticsFogOnALitLayerIsAnError)
+{
+    const TestScene s = small_scene();
+    RenderSettings settings;
+    settings.kinetics = KineticsMethod::fog;
+    std::vector<float> out(48 * 32 * 3);
+    const Status st = render_negative(s.stock, s.scene, s.view, settings, out.data(), nullptr);
+    EXPECT_FALSE(st);
+    EXPECT_NE(st.message().find("kinetics=fog: light reaches layer 'R'"), std::string::npos)
+        << st.message();
 }
 
 TEST(Render, PixelModelsFromTheCacheAreTheRendersOwn)

@@ -53,6 +53,7 @@ const char* kinetics_method_name(KineticsMethod method)
     case KineticsMethod::early_stop: return "early";
     case KineticsMethod::table: return "table";
     case KineticsMethod::curve: return "curve";
+    case KineticsMethod::fog: return "fog";
     }
     return "unknown";
 }
@@ -109,7 +110,8 @@ bool parse_engine(const std::string& name, Engine& out)
 bool parse_kinetics_method(const std::string& name, KineticsMethod& out)
 {
     constexpr KineticsMethod all[] = { KineticsMethod::chain, KineticsMethod::early_stop,
-                                       KineticsMethod::table, KineticsMethod::curve };
+                                       KineticsMethod::table, KineticsMethod::curve,
+                                       KineticsMethod::fog };
     return parse_by_name(name, all, kinetics_method_name, out);
 }
 

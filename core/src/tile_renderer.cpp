@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "development.h"
 #include "exposure.h"
@@ -67,6 +68,19 @@ public:
             uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
             bool plane_filled = false;
             for (const PopulationPlan& pop : layer.populations) {
+                if (pop.fast && pop.kinetics == KineticsMethod::fog) {
+                    // No light: no exposure to read; every grain of the
+                    // fog's thinned process develops (but for inhibition).
+                    FastCounts c;
+                    if (layer.inhibition)
+                        develop_fast<false>(layer, pop, rect, scratch, c, NoLight {});
+                    else
+                        develop_fast<true>(layer, pop, rect, scratch, c, NoLight {});
+                    grains += c.grains;
+                    developed += c.developed;
+                    scratch.population_end.push_back(scratch.discs.size());
+                    continue;
+                }
                 if (pop.fast) {
                     if (!plane_filled) {
                         // Grain centres lie within margin_um of the tile,
@@ -190,6 +204,7 @@ public:
             ls.reason           = m_layers[l].reason;
             ls.error_estimate   = m_layers[l].error_estimate;
             ls.setup_seconds    = m_layers[l].setup_seconds;
+            ls.estimated_seconds = m_layers[l].estimated_seconds;
             // Fixed summation order (row-major): deterministic.
             double sum = 0.0;
             for (int64_t i = 0; i < npix; ++i)
@@ -237,6 +252,14 @@ private:
         uint64_t grains = 0, developed = 0, photons = 0, events = 0;
     };
 
+    /// develop_fast's exposure integral for the fog's thinned grains
+    /// (KineticsMethod::fog): none is read; each grain develops with
+    /// probability 1, times the inhibitors' factor.
+    struct NoLight {
+        void prepare(const FastGrains::Batch&) const {}
+        double operator()(const FastGrains::Batch&, size_t) const { return 0.0; }
+    };
+
     /// The rectangle whose nearby grains (within their own radius) can have
     /// an image reaching `rect`: `rect` itself for silver, grown by the
     /// clouds' extra reach for dye (MODEL.md 8).
@@ -276,10 +299,14 @@ private:
                       TileScratch& scratch, FastCounts& c, const Integral& integral) const
     {
         const FramePlane* inhibition = layer.inhibition.get();
+        // The fog's thinned grains (KineticsMethod::fog): decided without
+        // light or curve.
+        constexpr bool kFog = std::is_same_v<Integral, NoLight>;
         // Without a curve (grains=fast asked for with other kinetics) every
         // grain takes the population's own decision.
-        const DevelopCurve* curve = pop.curve.get();
-        const double lambda_max   = curve ? curve->lambda_max() : -1.0;
+        const DevelopCurve* curve = kFog ? nullptr : pop.curve.get();
+        const double lambda_max
+            = kFog ? std::numeric_limits<double>::infinity() : curve ? curve->lambda_max() : -1.0;
         const double k            = pop.photons_per_value_um2;
         const RectUm tile         = rect;
         std::vector<Disc>& discs  = scratch.discs;
@@ -333,8 +360,12 @@ private:
                         if constexpr (!Plain)
                             uniform[j] = u;
                         // A grain beyond the curve reads it at 0 here and
-                        // is decided below.
-                        if constexpr (decltype(with_curve)::value)
+                        // is decided below. A fog grain develops with
+                        // probability 1: u >= 1 - 1 (inhibited u may be
+                        // negative).
+                        if constexpr (kFog)
+                            decided[j] = u >= 0.0;
+                        else if constexpr (decltype(with_curve)::value)
                             decided[j] = u >= 1.0 - curve->probability(l <= lambda_max ? l : 0.0);
                         else
                             decided[j] = 0;
@@ -385,6 +416,12 @@ private:
         double u = development_rng.uniform();
         if (layer.inhibition)
             u = inhibited_uniform(u, layer.inhibition->at(g.x_um, g.y_um));
+        if (pop.kinetics == KineticsMethod::fog) {
+            // A grain of the fog's thinned process: develops with
+            // probability 1 (u >= 1 - 1), times the inhibitors' factor.
+            o.developed = u >= 0.0;
+            return o;
+        }
         if (pop.kinetics == KineticsMethod::chain) {
             // The reference: every grain's absorbed photons, then its chain
             // until the grain's fate is decided. u is drawn first and n4

@@ -818,10 +818,15 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };
 
     const InputStats& in = report.render.input;
-    if (in.nonfinite_pixels)
-        con.warning(std::to_string(in.nonfinite_pixels) + " of the "
+    if (in.nan_pixels)
+        con.warning(std::to_string(in.nan_pixels) + " of the " + std::to_string(in.pixels_read)
+                    + " input pixels read have NaN values: they expose nothing");
+    if (in.saturated_pixels)
+        con.warning(std::to_string(in.saturated_pixels) + " of the "
                     + std::to_string(in.pixels_read)
-                    + " input pixels read have NaN or Inf values: they expose nothing");
+                    + " input pixels read (+Inf, or past the largest exposure the kinetics "
+                      "represent) saturate: clamped to that exposure, where every grain "
+                      "develops");
     if (in.negative_pixels)
         con.warning(std::to_string(in.negative_pixels) + " of the "
                     + std::to_string(in.pixels_read)

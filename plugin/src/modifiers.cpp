@@ -307,7 +307,8 @@ std::string names_of(const E (&all)[N], const char* (*to_name)(E))
 }
 
 constexpr KineticsMethod kKinetics[] = { KineticsMethod::chain, KineticsMethod::early_stop,
-                                        KineticsMethod::table, KineticsMethod::curve };
+                                        KineticsMethod::table, KineticsMethod::curve,
+                                        KineticsMethod::fog };
 constexpr ExposureMethod kExposureMethods[] = { ExposureMethod::disc, ExposureMethod::centre };
 constexpr CoverageMethod kCoverage[]
     = { CoverageMethod::exact, CoverageMethod::scanline, CoverageMethod::raster };
@@ -456,14 +457,16 @@ const Modifier kModifiers[] = {
       parse_engine_value },
     { "tolerance", "D", "density error budget of the approximate paths (auto), (0, 1]",
       [](const FilmgrainCommand& d) { return format_number(d.engine_options.tolerance); }, parse_tolerance },
-    { "kinetics", "chain|early|table|curve",
+    { "kinetics", "chain|early|table|curve|fog",
       "expert override (not with engine=exact): chain = exact's: every photon, the chain until "
       "the grain's fate is decided; early = the same, but no photons for a grain fog decides; "
       "table = P(develop|N) tabulated per scene; curve = the fast per-grain kernel: "
-      "P(develop|mean photons) from that table, one uniform per grain",
+      "P(develop|mean photons) from that table, one uniform per grain; fog = for layers no light "
+      "reaches (an error on a lit one): only the fog's developed grains are generated",
       [](const FilmgrainCommand&) {
-          return engine_choice("curve where a table pays for itself (large frames), else early; "
-                               "fast: curve");
+          return engine_choice("fog where no light reaches a layer (its pixel scale where "
+                               "that costs less); else curve where a table pays for itself "
+                               "(large frames), else early; fast: curve where light reaches");
       },
       parse_kinetics_value },
     { "photons", "disc|centre",

@@ -39,6 +39,8 @@ std::string stats_json(const RunReport& r)
                             { "colorspace", r.input_colorspace },
                             { "pixels_read", r.render.input.pixels_read },
                             { "nonfinite_pixels", r.render.input.nonfinite_pixels },
+                            { "nan_pixels", r.render.input.nan_pixels },
+                            { "saturated_pixels", r.render.input.saturated_pixels },
                             { "negative_pixels", r.render.input.negative_pixels },
                             { "denormal_pixels", r.render.input.denormal_pixels } };
     Json layers = Json::array();
@@ -53,7 +55,8 @@ std::string stats_json(const RunReport& r)
                            { "path", l.path },
                            { "reason", l.reason },
                            { "error_estimate", l.error_estimate },
-                           { "setup_seconds", l.setup_seconds } });
+                           { "setup_seconds", l.setup_seconds },
+                           { "estimated_seconds", l.estimated_seconds } });
     j["layers"] = std::move(layers);
     // Non-UTF-8 bytes in names (file paths) are replaced, never thrown on.
     return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";

@@ -7,9 +7,11 @@
 //   seconds {read, color, simulate, write, total},
 //   scan {width, height, pitch_x_um, pitch_y_um},
 //   roi {x, y, width, height},
-//   input {file, colorspace, pixels_read, nonfinite_pixels, negative_pixels},
+//   input {file, colorspace, pixels_read, nonfinite_pixels, nan_pixels,
+//          saturated_pixels, negative_pixels, denormal_pixels},
 //   layers [{name, grains, developed, absorbed_photons, kinetics_events,
-//            mean_density}]
+//            decided_early, mean_density, path, reason, error_estimate,
+//            setup_seconds, estimated_seconds}]
 #pragma once
 
 #include <cstdint>

@@ -310,35 +310,44 @@ def test_largest_side_within_limit_is_read(fg_bin, dirs):
 
 
 # ---------------------------------------------------------------------------
-# Special pixel values (documented behaviour, not errors): NaN and +-Inf
-# expose nothing, a negative layer value exposes nothing, a subnormal value
-# is used as is. All are counted in --stats input.*_pixels.
+# Special pixel values (documented behaviour, not errors; MODEL.md 2): NaN
+# and -Inf expose nothing, +Inf and values past the largest exposure the
+# kinetics represent saturate (clamped to it), a negative layer value
+# exposes nothing, a subnormal value is used as is. All are counted in
+# --stats input.*_pixels.
 
 def test_special_pixels_are_documented_and_counted(run, dirs):
     indir, outdir = dirs
     img = np.full((12, 16), 0.18, np.float32)
     specials = {(1, 1): np.nan, (2, 3): np.inf, (3, 5): -np.inf, (4, 7): -0.5,
-                (5, 9): np.float32(1e-40), (6, 11): -np.float32(1e-40)}
+                (5, 9): np.float32(1e-40), (6, 11): -np.float32(1e-40),
+                (8, 13): np.float32(1e37)}
     for (y, x), v in specials.items():
         img[y, x] = v
     assert np.isclose(img[5, 9], 1e-40, rtol=1e-3, atol=0)  # a float32 subnormal
-    # The same image with every special pixel at 0: it must render the same
-    # pixels (NaN, Inf, negative: zero exposure; a subnormal is used as is,
-    # and exposes ~1e-40 of a grey: no photon in practice).
+    # The same image with NaN, -Inf and the negatives at 0 and +Inf at
+    # 1e30: it must render the same pixels (NaN, -Inf, negative: zero
+    # exposure; +Inf, 1e30 and 1e37 all clamped to the same saturated
+    # exposure; a subnormal is used as is, and exposes ~1e-40 of a grey: no
+    # photon in practice).
     zeroed = img.copy()
     for (y, x) in specials:
         zeroed[y, x] = 0.0
+    zeroed[2, 3] = np.float32(1e30)
+    zeroed[8, 13] = np.float32(1e37)
     src = write_image(indir / "special.exr", img)
     ref = write_image(indir / "zeroed.exr", zeroed)
     before = tree_hashes(indir)
     r = run(src, "--filmgrain:stock=paper:" + FAST, "-o", outdir / "s.exr", "--stats",
             outdir / "s.json")
     assert r.returncode == 0, r.stderr
-    assert "warning" in r.stderr and "NaN or Inf" in r.stderr
+    assert "warning" in r.stderr and "NaN values" in r.stderr and "saturate" in r.stderr
     r = run(ref, "--filmgrain:stock=paper:" + FAST, "-o", outdir / "z.exr")
     assert r.returncode == 0, r.stderr
     stats = read_json(outdir / "s.json")["input"]
     assert stats["nonfinite_pixels"] == 3
+    assert stats["nan_pixels"] == 1
+    assert stats["saturated_pixels"] == 2  # +Inf and 1e37
     assert stats["negative_pixels"] == 2  # -0.5 and the negative subnormal
     assert stats["denormal_pixels"] == 2
     import OpenImageIO as oiio

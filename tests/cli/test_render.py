@@ -73,7 +73,8 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert set(s["scan"]) == {"width", "height", "pitch_x_um", "pitch_y_um"}
     assert set(s["roi"]) == {"x", "y", "width", "height"}
     assert set(s["input"]) == {"file", "colorspace", "pixels_read", "nonfinite_pixels",
-                               "negative_pixels", "denormal_pixels"}
+                               "nan_pixels", "saturated_pixels", "negative_pixels",
+                               "denormal_pixels"}
     assert s["engine"] == "auto" and s["stock"] == "vision3-500t" and s["seed"] == 42
     for layer in s["layers"]:  # which path ran, why, and its error bound
         assert "kinetics=" in layer["path"] and layer["reason"]
@@ -88,7 +89,8 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     for l in s["layers"]:
         assert set(l) == {"name", "grains", "developed", "absorbed_photons",
                           "kinetics_events", "decided_early", "mean_density", "path",
-                          "reason", "error_estimate", "setup_seconds"}
+                          "reason", "error_estimate", "setup_seconds",
+                          "estimated_seconds"}
         if "scale=pixel" in l["path"]:  # drawn from the pixel statistics: no grains
             assert l["grains"] == 0 and l["developed"] == 0
         else:
@@ -172,10 +174,13 @@ def test_nan_and_inf_pixels(run, tmp_path):
     out, stats = tmp_path / "o.exr", tmp_path / "s.json"
     r = run(src, f"--filmgrain:{FAST}", "-o", out, "--stats", stats)
     assert r.returncode == 0, r.stderr
-    assert "warning" in r.stderr and "NaN or Inf" in r.stderr and "3 of the" in r.stderr
+    assert "warning" in r.stderr and "NaN values" in r.stderr and "1 of the" in r.stderr
+    assert "saturate" in r.stderr
     assert "negative" in r.stderr
     s = read_json(stats)
     assert s["input"]["nonfinite_pixels"] == 3
+    assert s["input"]["nan_pixels"] == 1
+    assert s["input"]["saturated_pixels"] == 1  # the +Inf pixel
     assert s["input"]["negative_pixels"] == 1
     for c in Exr(out).channels.values():
         assert np.isfinite(c).all()

@@ -84,6 +84,16 @@ enum class KineticsMethod {
                  ///< per-grain kernel (disc exposure for auto, centre
                  ///< for fast; the table's error plus the curve's,
                  ///< reported)
+    fog,         ///< a layer that no light reaches (every exposure value
+                 ///< of the region the render reads is 0): every grain
+                 ///< develops with the fog probability f alone (MODEL.md
+                 ///< 4 with n4 = 0), so only the developed grains are
+                 ///< generated, as the grain process thinned to f (a
+                 ///< Poisson process of intensity f n: exact in
+                 ///< distribution, other grains than the full process's);
+                 ///< auto and fast choose it for such a layer unless its
+                 ///< pixel scale costs less; asked for on a lit layer, an
+                 ///< error
 };
 
 /// How a grain's absorbed photon count gets its mean (MODEL.md 2).
@@ -225,12 +235,22 @@ struct LayerStats {
     double error_estimate = 0.0;
     /// Seconds spent building this layer's tables, before the tiles.
     double setup_seconds = 0.0;
+    /// The seconds the planner estimated this layer's tiles would take on
+    /// the render's threads, from a linear model of its path's work (grains
+    /// generated, pixels written) measured on the project's reference
+    /// machine (core/src/engine/path_cost.h); the planner compares such
+    /// estimates where a layer could take either of two exact-enough paths.
+    double estimated_seconds = 0.0;
 };
 
 /// What the input held, over the input pixels the render read.
 struct InputStats {
     uint64_t pixels_read      = 0;
-    uint64_t nonfinite_pixels = 0;  ///< a NaN or Inf channel: zero exposure
+    uint64_t nonfinite_pixels = 0;  ///< a NaN or Inf channel
+    uint64_t nan_pixels       = 0;  ///< a NaN channel: zero exposure (MODEL.md 2)
+    /// Some layer's exposure at or past the largest the kinetics represent
+    /// (+Inf included): clamped to it, the light saturates (MODEL.md 2).
+    uint64_t saturated_pixels = 0;
     uint64_t negative_pixels  = 0;  ///< a negative channel (negative v: zero)
     uint64_t denormal_pixels  = 0;  ///< a subnormal channel (used as is)
 };
