@@ -408,7 +408,8 @@ struct PlanContext {
     double frame_area_um2() const { return frame.width_um * frame.height_um; }
     double frame_pixels() const
     {
-        return static_cast<double>(frame.scan_width) * static_cast<double>(frame.scan_height);
+        const Roi all = frame.frame_scan_pixels();
+        return static_cast<double>(all.width()) * static_cast<double>(all.height());
     }
     double roi_pixels() const { return static_cast<double>(roi.npixels()); }
     double roi_area_um2() const

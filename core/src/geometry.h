@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "filmgrain/image.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
 #include "rng.h"
@@ -23,7 +24,11 @@ struct RectUm {
 
 /// The film frame and the input and scan pixel grids over it. The input is
 /// mapped with square pixels of pitch frame_width / input_width; the scan
-/// covers the same frame with its own resolution. Row 0 is the top.
+/// has its own resolution: scan_width x scan_height pixels over the scan
+/// reference (a rectangle of input pixels, by default the whole input), its
+/// grid continuing beyond the reference at the same pitch, so that it may
+/// cover the rest of the frame too (a plate's overscan around its display
+/// window). Scan pixel (0, 0) is the reference's corner. Row 0 is the top.
 struct FrameGeometry {
     double width_um        = 0.0;
     double height_um       = 0.0;
@@ -34,19 +39,39 @@ struct FrameGeometry {
     int64_t scan_height    = 0;
     double scan_pitch_x_um = 0.0;
     double scan_pitch_y_um = 0.0;
+    /// The input pixels the scan's scan_width x scan_height pixels cover.
+    Roi scan_reference;
+    /// Film position of scan pixel (0, 0)'s corner (the reference's).
+    double scan_origin_x_um = 0.0;
+    double scan_origin_y_um = 0.0;
 
-    /// scan_width 0: same as the input; scan_height 0: follow the frame's
-    /// aspect ratio. Fails on non-positive or non-finite sizes.
+    /// scan_width 0: the reference's width in input pixels; scan_height 0:
+    /// follow the reference's aspect ratio. `reference`: empty for the
+    /// whole input. Fails on non-positive or non-finite sizes and on a
+    /// reference that is not inside the input.
     static Status make(double frame_width_mm, int64_t input_width, int64_t input_height,
-                       int64_t scan_width, int64_t scan_height, FrameGeometry& out);
+                       int64_t scan_width, int64_t scan_height, FrameGeometry& out,
+                       const Roi& reference = {});
 
     /// Film rectangle of a block of scan pixels [x0, x1) x [y0, y1).
     RectUm scan_rect(int64_t x0, int64_t y0, int64_t x1, int64_t y1) const
     {
-        return { x0 * scan_pitch_x_um, y0 * scan_pitch_y_um, x1 * scan_pitch_x_um,
-                 y1 * scan_pitch_y_um };
+        return { scan_origin_x_um + x0 * scan_pitch_x_um, scan_origin_y_um + y0 * scan_pitch_y_um,
+                 scan_origin_x_um + x1 * scan_pitch_x_um, scan_origin_y_um + y1 * scan_pitch_y_um };
     }
+
+    /// The scan pixels over the whole frame: the frame rounded outward to
+    /// whole scan pixels (without a reference, [0, scan_width) x [0,
+    /// scan_height)). A render's ROI lies inside it.
+    Roi frame_scan_pixels() const;
 };
+
+/// The scan pixels (scan_width x scan_height over `reference`) over a
+/// rectangle of input pixels: its film rectangle rounded outward to whole
+/// scan pixels, in exact integer arithmetic (filmgrain/render.h's
+/// scan_pixels_over).
+Roi scan_pixels_over(const Roi& reference, int64_t scan_width, int64_t scan_height,
+                     const Roi& input_pixels);
 
 /// One grain: a disc and the identity that keys all of its random streams.
 struct Grain {

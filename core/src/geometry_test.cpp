@@ -30,6 +30,50 @@ TEST(FrameGeometry, MapsInputAndScan)
     EXPECT_FALSE(FrameGeometry::make(NAN, 10, 10, 0, 0, g));
 }
 
+TEST(FrameGeometry, AScanReferenceSetsTheGridThatContinuesOverTheFrame)
+{
+    // An 84x58 input (10 um pixels) whose display window is the 64x48
+    // reference at (10, 5), scanned 50 wide: the scan's pitch is the
+    // reference's, its pixel (0, 0) the reference's corner, and the frame
+    // around the reference is covered by the same grid, rounded outward.
+    FrameGeometry g;
+    ASSERT_TRUE(FrameGeometry::make(0.84, 84, 58, 50, 0, g, Roi { 10, 5, 74, 53 }));
+    EXPECT_EQ(g.scan_height, 38);  // 50 x 48 / 64 = 37.5, rounded
+    EXPECT_DOUBLE_EQ(g.scan_pitch_x_um, 640.0 / 50);
+    EXPECT_DOUBLE_EQ(g.scan_pitch_y_um, 480.0 / 38);
+    EXPECT_DOUBLE_EQ(g.scan_origin_x_um, 100.0);
+    EXPECT_DOUBLE_EQ(g.scan_origin_y_um, 50.0);
+    const RectUm r = g.scan_rect(-1, 0, 50, 38);
+    EXPECT_DOUBLE_EQ(r.x0_um, 100.0 - 12.8);
+    EXPECT_DOUBLE_EQ(r.x1_um, 740.0);
+    EXPECT_DOUBLE_EQ(r.y1_um, 530.0);
+    // The frame: 10 input pixels left = 7.8125 scan pixels, 10 right =
+    // 7.8125; 5 above = 3.958, 5 below = 3.958: rounded outward.
+    const Roi all = g.frame_scan_pixels();
+    EXPECT_EQ(all.x_begin, -8);
+    EXPECT_EQ(all.x_end, 58);
+    EXPECT_EQ(all.y_begin, -4);
+    EXPECT_EQ(all.y_end, 42);
+    // Whole scan pixels stay whole: the reference itself, and 32 input
+    // pixels = 25 scan pixels.
+    const Roi ref = scan_pixels_over(g.scan_reference, g.scan_width, g.scan_height,
+                                     Roi { 10, 5, 74, 53 });
+    EXPECT_EQ(ref.x_begin, 0);
+    EXPECT_EQ(ref.x_end, 50);
+    EXPECT_EQ(ref.y_end, 38);
+    EXPECT_EQ(scan_pixels_over(g.scan_reference, 50, 38, Roi { 42, 5, 74, 53 }).x_begin, 25);
+    // Without a reference the scan is the frame's, as it always was.
+    FrameGeometry plain;
+    ASSERT_TRUE(FrameGeometry::make(0.84, 84, 58, 50, 0, plain));
+    EXPECT_EQ(plain.scan_origin_x_um, 0.0);
+    const Roi whole = plain.frame_scan_pixels();
+    EXPECT_EQ(whole.x_begin, 0);
+    EXPECT_EQ(whole.x_end, 50);
+    EXPECT_EQ(whole.y_end, plain.scan_height);
+    // A reference beyond the input is an error.
+    EXPECT_FALSE(FrameGeometry::make(0.84, 84, 58, 50, 0, g, Roi { 10, 5, 90, 53 }));
+}
+
 TEST(PopulationGrains, BinsPartitionTheDistribution)
 {
     Population pop;

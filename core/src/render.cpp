@@ -123,7 +123,8 @@ Status required_input_window(const Stock& stock, const SceneSettings& scene,
             return s;
         FrameGeometry frame;
         if (Status s = FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
-                                           settings.scan_width, settings.scan_height, frame);
+                                           settings.scan_width, settings.scan_height, frame,
+                                           settings.scan_reference);
             !s)
             return s;
         const Roi roi = settings.roi.empty() ? Roi { 0, 0, frame.scan_width, frame.scan_height }
@@ -148,17 +149,24 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         FrameGeometry frame;
         if (Status s = FrameGeometry::make(scene.frame_width_mm, input.frame_width(),
                                            input.frame_height(), settings.scan_width,
-                                           settings.scan_height, frame);
+                                           settings.scan_height, frame, settings.scan_reference);
             !s)
             return s;
         Roi roi = settings.roi;
+        const Roi all = frame.frame_scan_pixels();
         if (roi.empty()) {
             roi = { 0, 0, frame.scan_width, frame.scan_height };
-        } else if (roi.x_begin < 0 || roi.y_begin < 0 || roi.x_end > frame.scan_width
-                   || roi.y_end > frame.scan_height) {
+        } else if (roi.x_begin < all.x_begin || roi.y_begin < all.y_begin
+                   || roi.x_end > all.x_end || roi.y_end > all.y_end) {
+            if (all.x_begin == 0 && all.y_begin == 0 && all.x_end == frame.scan_width
+                && all.y_end == frame.scan_height)
+                return Status::errorf("roi = ", roi.x_begin, ",", roi.y_begin, ",", roi.width(),
+                                      ",", roi.height(), " (x,y,w,h) lies outside the ",
+                                      frame.scan_width, "x", frame.scan_height, " scan");
             return Status::errorf("roi = ", roi.x_begin, ",", roi.y_begin, ",", roi.width(), ",",
-                                  roi.height(), " (x,y,w,h) lies outside the ", frame.scan_width,
-                                  "x", frame.scan_height, " scan");
+                                  roi.height(), " (x,y,w,h) lies outside the scan's pixels over "
+                                  "the frame, [", all.x_begin, ", ", all.x_end, ") x [",
+                                  all.y_begin, ", ", all.y_end, ")");
         }
 
         // The window must hold every input pixel the render reads.

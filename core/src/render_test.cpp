@@ -207,6 +207,61 @@ TEST(Render, AWindowOfTheInputIsEnough)
     }
 }
 
+TEST(Render, AScanReferenceContinuesItsGridOverTheWholeFrame)
+{
+    // The 48x32 input's display window is its inner 30x20 at (9, 6),
+    // scanned 23 wide (a pitch that does not divide the margins): the ROI
+    // over the whole frame, rounded outward (negative coordinates
+    // included), renders with every engine the same bits for any threads
+    // and tiles, a sub-ROI is a crop of it, and the reference's own scan is
+    // finite film.
+    const TestScene s = small_scene();
+    for (Engine engine : { Engine::exact, Engine::automatic, Engine::fast }) {
+        RenderSettings one;
+        one.engine         = engine;
+        one.scan_width     = 23;
+        one.scan_reference = Roi { 9, 6, 39, 26 };
+        ScanGeometry scan;
+        ASSERT_TRUE(scan_geometry(s.scene, 48, 32, one, scan));
+        const Roi all = scan.frame_pixels;
+        ASSERT_LT(all.x_begin, 0);
+        ASSERT_GT(all.x_end, scan.width);
+        one.roi          = all;
+        one.nthreads     = 1;
+        one.tile_size_px = 64;
+        RenderSettings two = one;
+        two.nthreads       = 2;
+        two.tile_size_px   = 5;
+        const std::vector<float> a = render_scene(s, one);
+        EXPECT_TRUE(bit_identical(a, render_scene(s, two))) << engine_name(engine);
+        RenderSettings part = two;
+        part.roi            = Roi { all.x_begin, -1, 4, 7 };
+        const std::vector<float> crop = render_scene(s, part);
+        const size_t nl = 3;
+        for (int64_t y = part.roi.y_begin; y < part.roi.y_end; ++y)
+            for (int64_t x = part.roi.x_begin; x < part.roi.x_end; ++x)
+                for (size_t l = 0; l < nl; ++l)
+                    ASSERT_EQ(a[static_cast<size_t>((y - all.y_begin) * all.width()
+                                                    + (x - all.x_begin))
+                                    * nl
+                                + l],
+                              crop[static_cast<size_t>((y - part.roi.y_begin) * part.roi.width()
+                                                       + (x - part.roi.x_begin))
+                                       * nl
+                                   + l])
+                        << engine_name(engine) << " " << x << "," << y;
+        for (float v : a)
+            ASSERT_TRUE(std::isfinite(v));
+    }
+    // A ROI beyond the frame's scan pixels is an error.
+    RenderSettings beyond;
+    beyond.scan_width     = 23;
+    beyond.scan_reference = Roi { 9, 6, 39, 26 };
+    beyond.roi            = Roi { -20, 0, 4, 4 };
+    std::vector<float> out(24 * 4 * 3);
+    EXPECT_FALSE(render_negative(s.stock, s.scene, s.view, beyond, out.data(), nullptr));
+}
+
 TEST(Render, AnotherSeedGivesAnotherImage)
 {
     TestScene s = small_scene();

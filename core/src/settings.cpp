@@ -166,7 +166,8 @@ Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t in
 {
     FrameGeometry g;
     if (Status s = FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
-                                       settings.scan_width, settings.scan_height, g);
+                                       settings.scan_width, settings.scan_height, g,
+                                       settings.scan_reference);
         !s)
         return s;
     out.width           = g.scan_width;
@@ -176,7 +177,23 @@ Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t in
     out.input_pitch_um  = g.input_pitch_um;
     out.pitch_x_um      = g.scan_pitch_x_um;
     out.pitch_y_um      = g.scan_pitch_y_um;
+    out.reference       = g.scan_reference;
+    out.frame_pixels    = g.frame_scan_pixels();
     return {};
+}
+
+Roi scan_pixels_over(const ScanGeometry& scan, const Roi& input_pixels, double* exact)
+{
+    const Roi& r = scan.reference;
+    if (exact) {
+        const double sx = static_cast<double>(scan.width) / static_cast<double>(r.width());
+        const double sy = static_cast<double>(scan.height) / static_cast<double>(r.height());
+        exact[0] = static_cast<double>(input_pixels.x_begin - r.x_begin) * sx;
+        exact[1] = static_cast<double>(input_pixels.y_begin - r.y_begin) * sy;
+        exact[2] = static_cast<double>(input_pixels.x_end - r.x_begin) * sx;
+        exact[3] = static_cast<double>(input_pixels.y_end - r.y_begin) * sy;
+    }
+    return scan_pixels_over(r, scan.width, scan.height, input_pixels);
 }
 
 }  // namespace filmgrain

@@ -551,6 +551,14 @@ private:
         const int64_t tw = x1 - x0, th = y1 - y0;
         const LayerPlan& plan = m_layers[layer];
         const double px = m_frame.scan_pitch_x_um, py = m_frame.scan_pitch_y_um;
+        // The coverages place scan pixel x at [x px, (x + 1) px): where the
+        // scan's grid starts elsewhere on the film (a scan reference inside
+        // the frame), the discs move by the grid's origin instead.
+        if (m_frame.scan_origin_x_um != 0.0 || m_frame.scan_origin_y_um != 0.0)
+            for (Disc& d : scratch.discs) {
+                d.x_um -= m_frame.scan_origin_x_um;
+                d.y_um -= m_frame.scan_origin_y_um;
+            }
         scratch.fraction.resize(static_cast<size_t>(tw * th));
         double* fraction = scratch.fraction.data();
         if (plan.dye_samples > 0) {  // MODEL.md 8: the mean of 10^-D

@@ -7,6 +7,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include <algorithm>
 #include <climits>
 #include <exception>
 #include <string>
@@ -78,20 +79,30 @@ bool check_source(const OIIO::ImageBuf& src, std::string& error)
 
 /// Where the film lies in src and in the scan. The frame is src's display
 /// (full) window (its data window when none is set): frame_width_mm
-/// across it. Overscan: a data window reaching beyond the display window
-/// is film too, at the same pitch; the film the core renders is then the
-/// box around both windows (`film_*`), and the scan grows by the same
-/// margins, in whole scan pixels. Scan coordinates (ROI, output windows)
-/// keep (0, 0) at the display window's corner, so the overscan has negative
-/// coordinates, as in the EXR.
+/// across it. The film the core renders is the box around the display and
+/// the data windows (`film_*`, src pixels), at the display window's pitch;
+/// the scan's grid is the display window's (scan_w x scan_h over it: the
+/// core's scan reference), continued beyond it over the whole film. Scan
+/// coordinates (ROI, output windows) keep (0, 0) at the display window's
+/// corner, so overscan has negative coordinates, as in the EXR. The
+/// default output is the data window's scan, rounded outward to whole scan
+/// pixels (MODEL.md 2).
 struct FilmMapping {
     int64_t film_x = 0, film_y = 0;  ///< the film's corner, src pixels
     int64_t film_w = 0, film_h = 0;  ///< the film's size, src pixels
     double film_width_mm = 0.0;      ///< the film's width
     int64_t scan_w = 0, scan_h = 0;  ///< the display window's scan
-    int64_t core_scan_w = 0, core_scan_h = 0;  ///< the film's scan (core)
-    int64_t offset_x = 0, offset_y = 0;  ///< display corner in the film's scan
-    bool overscan = false;
+    Roi reference;                   ///< the display window, film pixels
+    ScanGeometry scan;               ///< the core's scan of the film
+    Roi data_scan;                   ///< the data window's scan (rounded)
+    double data_scan_exact[4] = {};  ///< ... before the rounding
+    bool data_scan_rounded() const
+    {
+        return data_scan_exact[0] != double(data_scan.x_begin)
+               || data_scan_exact[1] != double(data_scan.y_begin)
+               || data_scan_exact[2] != double(data_scan.x_end)
+               || data_scan_exact[3] != double(data_scan.y_end);
+    }
 };
 
 bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMapping& m,
@@ -110,39 +121,24 @@ bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMap
     const int64_t x0 = std::min<int64_t>(fx, spec.x), y0 = std::min<int64_t>(fy, spec.y);
     const int64_t x1 = std::max<int64_t>(fx + fw, int64_t(spec.x) + spec.width);
     const int64_t y1 = std::max<int64_t>(fy + fh, int64_t(spec.y) + spec.height);
-    m.overscan = has_overscan(spec);
-    if (!m.overscan) {
-        m.film_x = fx, m.film_y = fy, m.film_w = fw, m.film_h = fh;
-        m.film_width_mm = opts.scene.frame_width_mm;
-        m.core_scan_w   = opts.scan_width;  // the core's own rule, as before
-        m.core_scan_h   = opts.scan_height;
-        return true;
-    }
-    // Scan pixels per src pixel: scan_w / fw across, scan_h / fh down. Each
-    // margin must be a whole number of scan pixels.
-    const int64_t margins[4] = { fx - x0, fy - y0, x1 - (fx + fw), y1 - (fy + fh) };
-    const int64_t scale_num[4] = { m.scan_w, m.scan_h, m.scan_w, m.scan_h };
-    const int64_t scale_den[4] = { fw, fh, fw, fh };
-    int64_t scan_margin[4];
-    for (int i = 0; i < 4; ++i) {
-        const int64_t n = margins[i] * scale_num[i];
-        if (n % scale_den[i] != 0) {
-            error = OIIO::Strutil::fmt::format(
-                "the overscan (data window {}x{} at {},{} beyond the {}x{} display window at "
-                "{},{}) is not a whole number of scan pixels at scan = {}x{}: choose a scan "
-                "that makes it whole (the display window's size, or a multiple of it)",
-                spec.width, spec.height, spec.x, spec.y, fw, fh, fx, fy, m.scan_w, m.scan_h);
-            return false;
-        }
-        scan_margin[i] = n / scale_den[i];
-    }
     m.film_x = x0, m.film_y = y0, m.film_w = x1 - x0, m.film_h = y1 - y0;
     m.film_width_mm = opts.scene.frame_width_mm * static_cast<double>(m.film_w)
                       / static_cast<double>(fw);
-    m.offset_x    = scan_margin[0];
-    m.offset_y    = scan_margin[1];
-    m.core_scan_w = m.scan_w + scan_margin[0] + scan_margin[2];
-    m.core_scan_h = m.scan_h + scan_margin[1] + scan_margin[3];
+    m.reference = Roi { fx - x0, fy - y0, fx - x0 + fw, fy - y0 + fh };
+    SceneSettings scene  = opts.scene;
+    scene.frame_width_mm = m.film_width_mm;
+    RenderSettings settings;
+    settings.scan_width     = m.scan_w;
+    settings.scan_height    = m.scan_h;
+    settings.scan_reference = m.reference;
+    if (Status s = scan_geometry(scene, m.film_w, m.film_h, settings, m.scan); !s) {
+        error = s.message();
+        return false;
+    }
+    m.data_scan = scan_pixels_over(m.scan,
+                                   Roi { spec.x - x0, spec.y - y0, spec.x - x0 + spec.width,
+                                         spec.y - y0 + spec.height },
+                                   m.data_scan_exact);
     return true;
 }
 
@@ -235,50 +231,48 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
         dst.errorfmt("filmgrain: {}", error);
         return false;
     }
-    // The core sees the film (with its overscan) as its frame.
+    // The core sees the film (with its overscan) as its frame, and the
+    // display window's scan as its scan (the reference).
     SceneSettings scene  = opts.scene;
     scene.frame_width_mm = film.film_width_mm;
 
     RenderSettings settings;
     static_cast<EngineOptions&>(settings) = opts.engine_options;
-    settings.scan_width   = film.core_scan_w;
-    settings.scan_height  = film.core_scan_h;
-    settings.tile_size_px = opts.tile_size_px;
-    settings.nthreads     = resolve_threads(nthreads);
-    settings.progress     = opts.progress;
+    settings.scan_width     = film.scan_w;
+    settings.scan_height    = film.scan_h;
+    settings.scan_reference = film.reference;
+    settings.tile_size_px   = opts.tile_size_px;
+    settings.nthreads       = resolve_threads(nthreads);
+    settings.progress       = opts.progress;
 
-    ScanGeometry scan;
-    if (Status s = scan_geometry(scene, film.film_w, film.film_h, settings, scan); !s) {
-        dst.errorfmt("filmgrain: {}", s.message());
-        return false;
-    }
-    if (scan.width > INT_MAX || scan.height > INT_MAX) {
+    const Roi all = film.scan.frame_pixels;
+    if (film.scan_w > INT_MAX || film.scan_h > INT_MAX || all.x_begin < INT_MIN
+        || all.y_begin < INT_MIN || all.x_end > INT_MAX || all.y_end > INT_MAX) {
         dst.errorfmt("filmgrain: scan = {}x{}: an OpenImageIO image side must be at most {}",
-                     scan.width, scan.height, INT_MAX);
+                     film.scan_w, film.scan_h, INT_MAX);
         return false;
     }
-    // roi is in scan pixels with (0, 0) at the display window's corner; the
-    // overscan lies at negative coordinates and beyond the display scan.
-    const int64_t ox = film.offset_x, oy = film.offset_y;
+    // roi is in scan pixels with (0, 0) at the display window's corner, as
+    // the core's (the display window is its scan reference); by default the
+    // data window's scan.
     if (!roi.defined()) {
-        roi = OIIO::ROI(static_cast<int>(-ox), static_cast<int>(scan.width - ox),
-                        static_cast<int>(-oy), static_cast<int>(scan.height - oy));
-    } else if (roi.xbegin < -ox || roi.ybegin < -oy || roi.xend > scan.width - ox
-               || roi.yend > scan.height - oy || roi.xend <= roi.xbegin
-               || roi.yend <= roi.ybegin) {
-        if (film.overscan)
-            dst.errorfmt("filmgrain: roi = {},{},{},{} (x,y,w,h) does not lie inside the {}x{} "
-                         "scan with its overscan ([{}, {}) x [{}, {}))",
-                         roi.xbegin, roi.ybegin, roi.width(), roi.height(), film.scan_w,
-                         film.scan_h, -ox, scan.width - ox, -oy, scan.height - oy);
-        else
-            dst.errorfmt("filmgrain: roi = {},{},{},{} (x,y,w,h) does not lie inside the {}x{} "
-                         "scan",
-                         roi.xbegin, roi.ybegin, roi.width(), roi.height(), scan.width,
-                         scan.height);
+        const Roi& d = film.data_scan;
+        roi = OIIO::ROI(static_cast<int>(d.x_begin), static_cast<int>(d.x_end),
+                        static_cast<int>(d.y_begin), static_cast<int>(d.y_end));
+    } else if (roi.xbegin < all.x_begin || roi.ybegin < all.y_begin || roi.xend > all.x_end
+               || roi.yend > all.y_end || roi.xend <= roi.xbegin || roi.yend <= roi.ybegin) {
+        dst.errorfmt("filmgrain: roi = {},{},{},{} (x,y,w,h) does not lie inside the {}x{} "
+                     "scan{} ([{}, {}) x [{}, {}))",
+                     roi.xbegin, roi.ybegin, roi.width(), roi.height(), film.scan_w,
+                     film.scan_h,
+                     all.x_begin < 0 || all.y_begin < 0 || all.x_end > film.scan_w
+                             || all.y_end > film.scan_h
+                         ? " with its overscan"
+                         : "",
+                     all.x_begin, all.x_end, all.y_begin, all.y_end);
         return false;
     }
-    settings.roi = Roi { roi.xbegin + ox, roi.ybegin + oy, roi.xend + ox, roi.yend + oy };
+    settings.roi = Roi { roi.xbegin, roi.ybegin, roi.xend, roi.yend };
 
     // Validate before allocating: a broken stock must not become a
     // 0-channel image.
@@ -314,6 +308,17 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     for (const Layer& layer : opts.stock.layers)
         spec.channelnames.push_back(layer.name);
     set_metadata(spec, opts);
+    // MODEL.md 2: a data window that does not fall on whole scan pixels is
+    // rounded outward; the header says from what.
+    const double* exact = film.data_scan_exact;
+    const Roi& d        = film.data_scan;
+    if (film.data_scan_rounded())
+        spec.attribute("filmgrain:data_window_rounding",
+                       OIIO::Strutil::fmt::format(
+                           "the input's data window covers scan pixels [{:.6g}, {:.6g}) x "
+                           "[{:.6g}, {:.6g}), rounded outward to [{}, {}) x [{}, {})",
+                           exact[0], exact[2], exact[1], exact[3], d.x_begin, d.x_end,
+                           d.y_begin, d.y_end));
 
     // When dst is src, the view is a copy in `packed`: resetting dst is safe.
     dst.reset(spec, OIIO::InitializePixels::No);
@@ -332,6 +337,21 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
 }
 
 }  // namespace
+
+Status data_window_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, Roi& out,
+                        double* exact, bool* rounded)
+{
+    FilmMapping film;
+    std::string error;
+    if (!map_film(spec, opts, film, error))
+        return Status::error(error);
+    out = film.data_scan;
+    if (exact)
+        std::copy_n(film.data_scan_exact, 4, exact);
+    if (rounded)
+        *rounded = film.data_scan_rounded();
+    return {};
+}
 
 bool filmgrain(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
                OIIO::ROI roi, int nthreads, RenderStats* stats)

@@ -433,19 +433,16 @@ constexpr int64_t kMaxOutputValues = int64_t(1) << 31;
 Status check_output_size(const FilmgrainOptions& opts, const OIIO::ImageSpec& input,
                          const FilmgrainCommand& cmd)
 {
-    // The scan covers the display window (else the data window); with
-    // overscan the output is the data window's scan, larger.
-    const OIIO::ROI frame = film_frame_window(input);
-    const int64_t frame_w = frame.width(), frame_h = frame.height();
+    // The scan covers the display window (else the data window); the
+    // output is the data window's scan (rounded outward), or the ROI.
     ScanGeometry scan;
     if (Status s = frame_scan(input, opts, scan); !s)
         return s;
-    const double grow_x = has_overscan(input) ? double(input.width) / double(frame_w) : 1.0;
-    const double grow_y = has_overscan(input) ? double(input.height) / double(frame_h) : 1.0;
-    const int64_t w = cmd.has_roi ? cmd.roi_width
-                                  : static_cast<int64_t>(std::ceil(scan.width * std::max(1.0, grow_x)));
-    const int64_t h = cmd.has_roi ? cmd.roi_height
-                                  : static_cast<int64_t>(std::ceil(scan.height * std::max(1.0, grow_y)));
+    Roi data;
+    if (Status s = IBA::data_window_scan(input, opts, data); !s)
+        return s;
+    const int64_t w = cmd.has_roi ? cmd.roi_width : data.width();
+    const int64_t h = cmd.has_roi ? cmd.roi_height : data.height();
     const int64_t layers = static_cast<int64_t>(opts.stock.layers.size());
     if (w > kMaxOutputPixels || h > kMaxOutputPixels || w * h > kMaxOutputPixels
         || w * h * layers > kMaxOutputValues)
@@ -812,7 +809,7 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
         return Status::error(msg);
     }
 
-    if (Status s = frame_scan(header, opts, report.scan); !s)
+    if (Status s = report_scan(header, opts, report); !s)
         return s;
     const OIIO::ROI data = dst.roi();
     report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };

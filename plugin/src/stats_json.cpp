@@ -35,6 +35,13 @@ std::string stats_json(const RunReport& r)
                             { "y", r.roi.y_begin },
                             { "width", r.roi.width() },
                             { "height", r.roi.height() } };
+    const double* e     = r.data_window_exact;
+    j["data_window"]    = { { "x", r.data_window.x_begin },
+                            { "y", r.data_window.y_begin },
+                            { "width", r.data_window.width() },
+                            { "height", r.data_window.height() },
+                            { "exact", { e[0], e[1], e[2], e[3] } },
+                            { "rounded", r.data_window_rounded } };
     j["input"]          = { { "file", r.input_file },
                             { "colorspace", r.input_colorspace },
                             { "pixels_read", r.render.input.pixels_read },
@@ -60,6 +67,14 @@ std::string stats_json(const RunReport& r)
     j["layers"] = std::move(layers);
     // Non-UTF-8 bytes in names (file paths) are replaced, never thrown on.
     return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+}
+
+Status report_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, RunReport& report)
+{
+    if (Status s = frame_scan(spec, opts, report.scan); !s)
+        return s;
+    return IBA::data_window_scan(spec, opts, report.data_window, report.data_window_exact,
+                                 &report.data_window_rounded);
 }
 
 }  // namespace filmgrain::cli

@@ -7,6 +7,7 @@
 //   seconds {read, color, simulate, write, total},
 //   scan {width, height, pitch_x_um, pitch_y_um},
 //   roi {x, y, width, height},
+//   data_window {x, y, width, height, exact [x0, y0, x1, y1], rounded},
 //   input {file, colorspace, pixels_read, nonfinite_pixels, nan_pixels,
 //          saturated_pixels, negative_pixels, denormal_pixels},
 //   layers [{name, grains, developed, absorbed_photons, kinetics_events,
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <string>
 
+#include "filmgrain/imagebufalgo_filmgrain.h"
 #include "filmgrain/render.h"
 
 namespace filmgrain::cli {
@@ -36,6 +38,11 @@ struct RunReport {
     SceneSettings scene;
     ScanGeometry scan;
     Roi roi;
+    /// The input's data window in scan pixels, rounded outward
+    /// (IBA::data_window_scan), and before the rounding.
+    Roi data_window;
+    double data_window_exact[4] = { 0.0, 0.0, 0.0, 0.0 };
+    bool data_window_rounded    = false;
     std::string input_file;  ///< path, or "wedge" or "chart"
     std::string input_colorspace;
     /// --filmgrain:output= (output_kind_name).
@@ -46,5 +53,10 @@ struct RunReport {
 
 /// The report as a pretty-printed JSON object (ends with a newline).
 std::string stats_json(const RunReport& report);
+
+/// Fills report.scan (the display window's scan) and report.data_window*
+/// (IBA::data_window_scan) for an input of header `spec` rendered with
+/// `opts`: what the CLI and the Python module report alike.
+Status report_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, RunReport& report);
 
 }  // namespace filmgrain::cli

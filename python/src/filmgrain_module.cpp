@@ -247,7 +247,7 @@ py::tuple render(py::array pixels, const std::string& modifiers,
             dst = std::move(result);
     }
 
-    if (Status s = frame_scan(spec, opts, report.scan); !s)
+    if (Status s = cli::report_scan(spec, opts, report); !s)
         throw Error(s.message());
     const OIIO::ROI data = dst.roi();
     report.roi           = Roi { data.xbegin, data.ybegin, data.xend, data.yend };

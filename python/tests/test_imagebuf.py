@@ -44,7 +44,8 @@ def test_render_imagebuf_equals_cli(fg_bin, tmp_path, scene_exr):
 
 def test_data_window_inside_the_display_window_is_placed_as_by_the_cli(fg_bin, tmp_path):
     """A 40x30 data window at (12, 9) of a 64x48 display window: the film
-    frame is the display window, pixels outside the data window are black."""
+    frame is the display window, and the negative covers the data window
+    (MODEL.md 2), in the display window's scan."""
     pixels = scene_pixels(40, 30)
     window = (12, 9, 0, 0, 64, 48)
     path = write_exr(tmp_path / "crop.exr", pixels, window=window)
@@ -57,9 +58,13 @@ def test_data_window_inside_the_display_window_is_placed_as_by_the_cli(fg_bin, t
     assert (stats["scan"]["width"], stats["scan"]["height"]) == (64, 48)
     assert stats["scan"]["pitch_x_um"] == FAST_WIDTH_MM * 1000.0 / 64
     assert_buf_equals_cli(buf, tmp_path, tmp_path / "cli.exr")
-    # Not the same as rendering the bare 40x30 array as a whole frame.
+    s = buf.spec()
+    assert (s.x, s.y, s.width, s.height) == (12, 9, 40, 30)
+    # Not the same as rendering the bare 40x30 array as a whole frame: its
+    # pixels are 64/40 as wide.
     bare = filmgrain.render(pixels, **mods)
-    assert bare.density.shape[:2] == (30, 40) != (buf.spec().height, buf.spec().width)
+    assert bare.density.shape[:2] == (30, 40)
+    assert not np.array_equal(bare.density, buf.get_pixels(oiio.FLOAT))
 
 
 def test_to_imagebuf_of_a_render(fg_bin, tmp_path, scene_exr):

@@ -311,12 +311,15 @@ def test_overscan_is_rendered_as_film_and_keeps_both_windows(run, dirs):
     s = Exr(outdir / "big.exr").spec
     assert (s.x, s.y, s.width, s.height, s.full_width, s.full_height) == (-16, -16, 176, 144,
                                                                           144, 112)
-    # A scan that would cut a scan pixel, and a roi beyond the overscan.
-    r = run(indir / "plate.exr", f"--filmgrain:{FAST}:scan=100", "-o", outdir / "bad.exr")
-    assert r.returncode == 1 and "whole number of scan pixels" in r.stderr, r.stderr
+    # A scan that cuts a scan pixel rounds the overscan outward (MODEL.md
+    # 2; tests/cli/test_windows.py), and a roi beyond it is an error.
+    r = run(indir / "plate.exr", f"--filmgrain:{FAST}:scan=100", "-o", outdir / "odd.exr")
+    assert r.returncode == 0, r.stderr
+    s = Exr(outdir / "odd.exr").spec
+    assert (s.x, s.y, s.width, s.height) == (-12, -12, 124, 102)
     r = run(indir / "plate.exr", f"--filmgrain:{FAST}:roi=-9,0,4,4", "-o", outdir / "bad.exr")
     assert r.returncode == 1 and "with its overscan" in r.stderr, r.stderr
-    assert sorted(os.listdir(outdir)) == ["big.exr", "neg.exr", "roi.exr"]
+    assert sorted(os.listdir(outdir)) == ["big.exr", "neg.exr", "odd.exr", "roi.exr"]
 
 
 def test_tables_kept_on_disk_for_the_next_process(run, tmp_path):

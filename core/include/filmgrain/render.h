@@ -174,7 +174,17 @@ struct RenderSettings : EngineOptions {
     int64_t scan_width = 0;
     /// Scan height; 0: the frame's aspect at scan_width (or the input's).
     int64_t scan_height = 0;
-    /// Region of the scan to render; empty: the whole scan.
+    /// The input pixels (whole-image coordinates) that the scan_width x
+    /// scan_height scan covers; empty: the whole input (the frame). Scan
+    /// pixel (0, 0) is its corner, and the scan's grid continues beyond it
+    /// at the same pitch over the rest of the frame, rounded outward to
+    /// whole scan pixels (MODEL.md 2: a plate's data window beyond or
+    /// inside its display window, the reference): a ROI may lie anywhere
+    /// there, at negative coordinates too. Scan sizes and aspect (0 above)
+    /// then follow the reference.
+    Roi scan_reference;
+    /// Region of the scan to render; empty: the scan of the reference
+    /// ([0, width) x [0, height)).
     Roi roi;
     /// Worker threads; 0: all hardware threads.
     int nthreads = 0;
@@ -190,18 +200,32 @@ struct RenderSettings : EngineOptions {
 
 /// The scan's geometry for a given input size (MODEL.md 1).
 struct ScanGeometry {
-    int64_t width          = 0;  ///< scan pixels across the frame
+    int64_t width          = 0;  ///< scan pixels across the reference (the frame)
     int64_t height         = 0;
     double frame_width_um  = 0.0;
     double frame_height_um = 0.0;
     double input_pitch_um  = 0.0;  ///< input pixel side
     double pitch_x_um      = 0.0;  ///< scan pixel width
     double pitch_y_um      = 0.0;  ///< scan pixel height
+    /// The input pixels the width x height scan covers (settings'
+    /// scan_reference, or the whole input).
+    Roi reference;
+    /// The scan pixels over the whole frame, rounded outward (where a ROI
+    /// may lie): [0, width) x [0, height) without a reference.
+    Roi frame_pixels;
 };
 
 /// The scan an input of input_width x input_height gives with `settings`.
 Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
                      const RenderSettings& settings, ScanGeometry& out);
+
+/// The scan pixels over a rectangle of input pixels (whole-image
+/// coordinates, may reach beyond the input): its film rectangle rounded
+/// outward to whole scan pixels, in the scan's coordinates. `exact`
+/// (optional, 4 values x0, y0, x1, y1) receives the rectangle before the
+/// rounding, in scan pixels. Exact integer arithmetic: an input rectangle
+/// that falls on whole scan pixels gives them exactly.
+Roi scan_pixels_over(const ScanGeometry& scan, const Roi& input_pixels, double* exact = nullptr);
 
 /// The input pixels, in whole-image coordinates, that a render of
 /// settings.roi (or the whole scan) reads: its film region grown by the

@@ -103,12 +103,13 @@ namespace IBA {
 ///   2-channel images are an error. Any pixel type (converted to float). The
 ///   film frame covers src's display (full) window (its data window when no
 ///   display window is set): opts.scene.frame_width_mm across it, square
-///   pixels; pixels outside the data window are black. Overscan: where the
-///   data window reaches beyond the display window, that margin is film too
-///   (same pitch) and is rendered: the scan grows by the margin in scan
-///   pixels (it must come to whole scan pixels, else an error), at negative
-///   coordinates and beyond the display scan, as in the EXR; the film's
-///   grain is then laid out from the overscan's corner. Only the pixels under
+///   pixels; pixels outside the data window are black. The negative covers
+///   the data window, scaled to the scan and rounded outward to whole scan
+///   pixels (MODEL.md 2): smaller than the display window (a crop, a CG
+///   element's box) or larger (overscan: that margin is film too, at the
+///   same pitch, at negative coordinates and beyond the display scan, as
+///   in the EXR); the film's grain is laid out from the corner of the box
+///   around both windows. Only the pixels under
 ///   the ROI plus a grain radius are read (a cache-backed src is read only
 ///   there); float pixels in memory are used in place, not copied. NaN and
 ///   Inf channels expose nothing and are counted in
@@ -116,8 +117,8 @@ namespace IBA {
 /// dst: (re)allocated as float with one channel per stock layer, named
 ///   after the layer (stock order): negative density, -log10(transmittance)
 ///   plus the stock's base density. Its full (display) window is the scan
-///   of src's display window, its data window the ROI (by default the whole
-///   scan and its overscan).
+///   of src's display window, its data window the ROI (by default the
+///   data window's scan, data_window_scan).
 ///   Metadata on dst's spec (strings unless noted): filmgrain:quantity,
 ///   filmgrain:stock (the full stock as JSON), filmgrain:stock_name,
 ///   filmgrain:seed (decimal: 64-bit), filmgrain:frame (decimal, only for
@@ -126,8 +127,9 @@ namespace IBA {
 ///   grain_seed(scene)), filmgrain:exposure_stops (float),
 ///   filmgrain:shutter_s (float), filmgrain:frame_width_mm (float),
 ///   filmgrain:engine, filmgrain:version.
-/// roi: scan pixels to render (default: the whole scan). Must lie inside
-///   the scan.
+/// roi: scan pixels to render (default: the data window's scan). Must lie
+///   inside the scan pixels over the film (the box around the display and
+///   data windows, rounded outward).
 /// stats: if not null, receives the render's statistics (grain counts per
 ///   layer, special input pixels, simulation time).
 bool filmgrain(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
@@ -150,6 +152,18 @@ Status frame_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, Sca
 /// True when `spec`'s data window reaches beyond its display window
 /// (overscan: rendered as film too, see IBA::filmgrain).
 bool has_overscan(const OIIO::ImageSpec& spec);
+
+namespace IBA {
+/// The scan pixels `spec`'s data window covers with `opts`, in scan
+/// coordinates ((0, 0) at the display window's corner): its film rectangle
+/// rounded outward to whole scan pixels (MODEL.md 2), the operator's
+/// default ROI and the negative's data window. `exact` (optional, 4 values
+/// x0, y0, x1, y1) receives the rectangle before the rounding, `rounded`
+/// (optional) whether the rounding moved it (then the operator's output
+/// says so in its filmgrain:data_window_rounding attribute).
+Status data_window_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, Roi& out,
+                        double* exact = nullptr, bool* rounded = nullptr);
+}  // namespace IBA
 
 /// Value of the filmgrain:quantity attribute: what the pixels mean.
 inline constexpr const char* kFilmgrainQuantity
