@@ -357,6 +357,12 @@ Status plan_route(const OCIO::Config& config, const ConfigInfo& info,
     const V3 cs_white = mul(to_xyz, mul(route.cs_to_ap0, V3(1.0, 1.0, 1.0)));
     const V3 xy_white = mul(xy_to_xyz, V3(1.0, 1.0, 1.0));
     route.xy_to_ap0   = to_xyz.inverse() * bradford(xy_white, cs_white) * xy_to_xyz;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(route.xy_to_ap0[r][c]))  // a white with a zero cone response
+                return Status::errorf("chromaticities (", describe_xy(xy),
+                                      "): Bradford cannot adapt this white to colour space '",
+                                      cs->getName(), "''s");
     route.distance_xy = 0.0;
     for (int c = 0; c < 3; ++c) {
         double xa, ya, xb, yb;
