@@ -37,6 +37,9 @@ std::string stats_json(const RunReport& r)
                             { "height", r.roi.height() } };
     j["input"]          = { { "file", r.input_file },
                             { "colorspace", r.input_colorspace },
+                            { "chromaticities", r.input_chromaticities
+                                                    ? Json(*r.input_chromaticities)
+                                                    : Json(nullptr) },
                             { "pixels_read", r.render.input.pixels_read },
                             { "nonfinite_pixels", r.render.input.nonfinite_pixels },
                             { "negative_pixels", r.render.input.negative_pixels },

@@ -7,12 +7,15 @@
 //   seconds {read, color, simulate, write, total},
 //   scan {width, height, pitch_x_um, pitch_y_um},
 //   roi {x, y, width, height},
-//   input {file, colorspace, pixels_read, nonfinite_pixels, negative_pixels},
+//   input {file, colorspace, chromaticities, pixels_read, nonfinite_pixels,
+//          negative_pixels, denormal_pixels},
 //   layers [{name, grains, developed, absorbed_photons, kinetics_events,
 //            mean_density}]
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "filmgrain/render.h"
@@ -35,7 +38,14 @@ struct RunReport {
     ScanGeometry scan;
     Roi roi;
     std::string input_file;  ///< path, or "wedge" or "chart"
+    /// The OCIO colour space INPUT was read as ("scene_linear" for the wedge
+    /// and the chart), or "chromaticities" when converted from the file's.
     std::string input_colorspace;
+    /// The file's chromaticities (red x, y, green x, y, blue x, y, white x,
+    /// y) when they decided its colour: converted from, or found to be
+    /// scene_linear's. Unset when it has none or a colour space name
+    /// (--iscolorspace, oiio:ColorSpace) decided.
+    std::optional<std::array<double, 8>> input_chromaticities;
     /// --filmgrain:output= (output_kind_name).
     std::string output = "density";
     RenderStats render;
