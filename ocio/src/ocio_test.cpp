@@ -1,6 +1,8 @@
 // filmgrain: unit tests of the OpenColorIO input conversion (filmgrain/ocio.h).
 #include <filmgrain/ocio.h>
 
+#include <Imath/ImathMatrix.h>
+#include <Imath/ImathVec.h>
 #include <OpenColorIO/OpenColorIO.h>
 #include <gtest/gtest.h>
 
@@ -661,4 +663,289 @@ TEST_F(OcioTest, DisplayViewDefaultsToSrgbAces)
     s = Converter::create("", "scene_linear", "nowhere", conv);
     ASSERT_FALSE(s.ok());
     EXPECT_NE(s.message().find("unknown colour space 'nowhere'"), std::string::npos);
+}
+
+// --- Chromaticities -----------------------------------------------------------
+
+namespace {
+
+using filmgrain::ocio::Chromaticities;
+
+/// ITU-R BT.709-6 primaries, D65 white.
+const Chromaticities k_rec709_xy = { 0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290 };
+/// CIE XYZ as RGB, equal-energy white E.
+const Chromaticities k_xyz_xy = { 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0 / 3.0, 1.0 / 3.0 };
+/// ACES AP0 primaries, ACES white (SMPTE ST 2065-1).
+const Chromaticities k_ap0_xy = { 0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.0770, 0.32168, 0.33767 };
+/// Made up: wider than Rec.709, white near D55.
+const Chromaticities k_made_up_xy = { 0.70, 0.29, 0.17, 0.78, 0.13, 0.03, 0.3324, 0.3474 };
+
+/// Linear Rec.709 RGB -> CIE XYZ (D65), as published for sRGB / BT.709
+/// (IEC 61966-2-1 gives it to 4 digits; these 10 are its exact derivation
+/// from the primaries and D65 = 0.3127, 0.3290). Rows are X, Y, Z.
+const Imath::M33d k_rec709_to_xyz(0.4123907993, 0.3575843394, 0.1804807884,
+                                  0.2126390059, 0.7151686788, 0.0721923154,
+                                  0.0193308187, 0.1191947798, 0.9505321522);
+/// ACES AP0 -> XYZ, the NPM published in SMPTE ST 2065-1.
+const Imath::M33d k_ap0_to_xyz(0.9525523959, 0.0, 0.0000936786,
+                               0.3439664498, 0.7281660966, -0.0721325464,
+                               0.0, 0.0, 1.0088251844);
+/// Bradford's cone response matrix (Lam 1985).
+const Imath::M33d k_bradford_cones(0.8951, 0.2664, -0.1614, -0.7502, 1.7135, 0.0367,
+                                   0.0389, -0.0685, 1.0296);
+
+/// m v, v a column (Imath's `v * m` takes v as a row).
+Imath::V3d mul(const Imath::M33d& m, const Imath::V3d& v)
+{
+    return v * m.transposed();
+}
+
+/// Bradford adaptation taking white XYZ `from` to white XYZ `to`.
+Imath::M33d bradford(const Imath::V3d& from, const Imath::V3d& to)
+{
+    const Imath::V3d a = mul(k_bradford_cones, from), b = mul(k_bradford_cones, to);
+    Imath::M33d gain;
+    gain[0][0] = b.x / a.x;
+    gain[1][1] = b.y / a.y;
+    gain[2][2] = b.z / a.z;
+    return k_bradford_cones.inverse() * gain * k_bradford_cones;
+}
+
+Imath::V3d white_of(const Imath::M33d& rgb_to_xyz)
+{
+    return mul(rgb_to_xyz, Imath::V3d(1.0, 1.0, 1.0));
+}
+
+/// Linear Rec.709 test colours: white, the primaries, a skin tone, a sky
+/// blue, a dark green, a bright orange.
+const std::vector<Imath::V3d> k_rec709_colours = {
+    { 1.0, 1.0, 1.0 }, { 1.0, 0.0, 0.0 }, { 0.0, 1.0, 0.0 }, { 0.0, 0.0, 1.0 },
+    { 0.45, 0.30, 0.22 }, { 0.20, 0.35, 0.70 }, { 0.03, 0.12, 0.04 }, { 2.5, 0.9, 0.1 },
+};
+
+std::unique_ptr<InputConverter> make_xy(const std::string& config, const Chromaticities& xy,
+                                        double tolerance_xy
+                                        = filmgrain::ocio::k_chromaticities_tolerance_xy)
+{
+    std::unique_ptr<InputConverter> conv;
+    Status s = InputConverter::create_from_chromaticities(config, xy, conv, tolerance_xy);
+    EXPECT_TRUE(s.ok()) << s.message();
+    EXPECT_EQ(conv != nullptr, s.ok());
+    return conv;
+}
+
+/// Converts `in` (pixels of the file) and checks each against `expected`.
+void expect_converts(const InputConverter& conv, const std::vector<Imath::V3d>& in,
+                     const std::vector<Imath::V3d>& expected, double tolerance,
+                     const std::string& what)
+{
+    std::vector<float> rgb;
+    for (const Imath::V3d& v : in)
+        rgb.insert(rgb.end(), { float(v.x), float(v.y), float(v.z) });
+    conv.apply_rgb(rgb.data(), in.size());
+    for (size_t i = 0; i < in.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(rgb[3 * i + size_t(c)], expected[i][c], tolerance)
+                << what << ": colour " << i << " channel " << c;
+}
+
+}  // namespace
+
+TEST_F(OcioTest, Rec709ChromaticitiesAreTheEmbeddedSceneLinear)
+{
+    // Within the default tolerance: no conversion at all.
+    auto conv = make_xy("", k_rec709_xy);
+    ASSERT_TRUE(conv);
+    EXPECT_TRUE(conv->is_noop());
+    EXPECT_EQ(conv->source_colorspace(), "");
+    EXPECT_EQ(conv->via_colorspace(), "ACES2065-1");
+    EXPECT_EQ(conv->scene_linear_colorspace(), "lin_rec709");
+    float px[3] = { 0.3f, 0.2f, 0.1f };
+    conv->apply_rgb(px, 1);
+    EXPECT_EQ(px[0], 0.3f);
+
+    // With tolerance 0 the conversion is built: Rec.709 -> XYZ -> Bradford
+    // D65 -> ACES white -> AP0 by our matrices, then AP0 -> Rec.709 by
+    // OCIO's, which compose to the identity. OCIO itself then drops the
+    // product as an identity matrix (it does so for a diagonal within ~1e-6
+    // of 1, measured with OCIO 2.1.2), so is_noop() may be true or false
+    // here; either way every colour comes back within 1e-6 (relative above
+    // 1).
+    auto exact = make_xy("", k_rec709_xy, 0.0);
+    ASSERT_TRUE(exact);
+    std::vector<float> rgb;
+    for (const Imath::V3d& c : k_rec709_colours)
+        rgb.insert(rgb.end(), { float(c.x), float(c.y), float(c.z) });
+    exact->apply_rgb(rgb.data(), k_rec709_colours.size());
+    for (size_t i = 0; i < k_rec709_colours.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(rgb[3 * i + size_t(c)], k_rec709_colours[i][c],
+                        1e-6 * std::max(1.0, k_rec709_colours[i][c]))
+                << "colour " << i << " channel " << c;
+}
+
+TEST_F(OcioTest, XyzChromaticitiesGiveRec709)
+{
+    // A Rec.709 colour in XYZ with white E: Rec.709 -> XYZ (published),
+    // Bradford D65 -> E. Converting back must give the Rec.709 value.
+    const Imath::M33d to_file
+        = bradford(white_of(k_rec709_to_xyz), Imath::V3d(1.0, 1.0, 1.0)) * k_rec709_to_xyz;
+    std::vector<Imath::V3d> file;
+    for (const Imath::V3d& c : k_rec709_colours)
+        file.push_back(mul(to_file, c));
+    auto conv = make_xy("", k_xyz_xy);
+    ASSERT_TRUE(conv);
+    EXPECT_FALSE(conv->is_noop());
+    expect_converts(*conv, file, k_rec709_colours, 1e-5, "XYZ (E)");
+}
+
+TEST_F(OcioTest, Ap0ChromaticitiesGiveRec709)
+{
+    // Through the published ST 2065-1 NPM: Rec.709 -> XYZ -> Bradford D65 ->
+    // ACES white -> AP0.
+    const Imath::M33d to_file = k_ap0_to_xyz.inverse()
+                                * bradford(white_of(k_rec709_to_xyz), white_of(k_ap0_to_xyz))
+                                * k_rec709_to_xyz;
+    std::vector<Imath::V3d> file;
+    for (const Imath::V3d& c : k_rec709_colours)
+        file.push_back(mul(to_file, c));
+    auto conv = make_xy("", k_ap0_xy);
+    ASSERT_TRUE(conv);
+    EXPECT_FALSE(conv->is_noop());
+    expect_converts(*conv, file, k_rec709_colours, 1e-5, "AP0");
+    // AP0 red is colour-science's ACES2065-1 -> sRGB first column (as in
+    // Aces2065ToRec709 above).
+    expect_converts(*conv, { { 1.0, 0.0, 0.0 } },
+                    { { 2.5216861867, -0.2764799048, -0.0153780649 } }, 1e-5, "AP0 red");
+
+    // The same as the config's own ACES2065-1 colour space.
+    auto named = make("", "ACES2065-1");
+    ASSERT_TRUE(named);
+    std::vector<float> a, b;
+    for (const Imath::V3d& c : k_rec709_colours)
+        for (int i = 0; i < 3; ++i)
+            a.push_back(float(c[i]));
+    b = a;
+    conv->apply_rgb(a.data(), k_rec709_colours.size());
+    named->apply_rgb(b.data(), k_rec709_colours.size());
+    for (size_t i = 0; i < a.size(); ++i)
+        EXPECT_NEAR(a[i], b[i], 1e-6) << "value " << i;
+}
+
+TEST_F(OcioTest, MadeUpChromaticitiesKeepWhiteAndTheirPrimaries)
+{
+    auto conv = make_xy("", k_made_up_xy);
+    ASSERT_TRUE(conv);
+    EXPECT_FALSE(conv->is_noop());
+    // White stays white.
+    expect_converts(*conv, { { 1.0, 1.0, 1.0 }, { 0.18, 0.18, 0.18 } },
+                    { { 1.0, 1.0, 1.0 }, { 0.18, 0.18, 0.18 } }, 1e-6, "white");
+    // Each primary, converted, then taken back to XYZ (published Rec.709
+    // matrix) and adapted from D65 to the made-up white, has the made-up
+    // primary's chromaticity.
+    const Imath::V3d made_up_white(k_made_up_xy[6] / k_made_up_xy[7], 1.0,
+                                   (1.0 - k_made_up_xy[6] - k_made_up_xy[7]) / k_made_up_xy[7]);
+    const Imath::M33d back = bradford(white_of(k_rec709_to_xyz), made_up_white) * k_rec709_to_xyz;
+    for (int p = 0; p < 3; ++p) {
+        float px[3] = { 0.0f, 0.0f, 0.0f };
+        px[p]       = 1.0f;
+        conv->apply_rgb(px, 1);
+        const Imath::V3d xyz = mul(back, Imath::V3d(px[0], px[1], px[2]));
+        const double sum     = xyz.x + xyz.y + xyz.z;
+        EXPECT_NEAR(xyz.x / sum, k_made_up_xy[size_t(2 * p)], 1e-6) << "primary " << p;
+        EXPECT_NEAR(xyz.y / sum, k_made_up_xy[size_t(2 * p + 1)], 1e-6) << "primary " << p;
+    }
+}
+
+TEST_F(OcioTest, CompareChromaticities)
+{
+    const auto same = [](const std::string& cs, const Chromaticities& xy) {
+        bool result = false;
+        Status s    = filmgrain::ocio::compare_chromaticities("", cs, xy, result);
+        EXPECT_TRUE(s.ok()) << cs << ": " << s.message();
+        return result;
+    };
+    EXPECT_TRUE(same("scene_linear", k_rec709_xy));
+    EXPECT_TRUE(same("lin_rec709", k_rec709_xy));
+    EXPECT_TRUE(same("sRGB", k_rec709_xy));  // a curve through 0 and 1
+    EXPECT_FALSE(same("ACEScg", k_rec709_xy));
+    EXPECT_TRUE(same("ACES2065-1", k_ap0_xy));
+    EXPECT_FALSE(same("scene_linear", k_ap0_xy));
+    EXPECT_TRUE(same("ACEScg", { 0.713, 0.293, 0.165, 0.830, 0.128, 0.044, 0.32168, 0.33767 }));
+    // D65 written as 0.31271, 0.32902, and Rec.709 as floats: the same.
+    EXPECT_TRUE(same("scene_linear", { 0.64f, 0.33f, 0.3f, 0.6f, 0.15f, 0.06f, 0.31271, 0.32902 }));
+    // Rec.709 primaries with a D50 white are another colour space.
+    EXPECT_FALSE(same("scene_linear", { 0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3457, 0.3585 }));
+    // 2e-3 off in one primary's x is beyond the tolerance; 2e-4 is within.
+    EXPECT_FALSE(same("scene_linear", { 0.642, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290 }));
+    EXPECT_TRUE(same("scene_linear", { 0.6402, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290 }));
+
+    bool result = true;
+    Status s = filmgrain::ocio::compare_chromaticities("", "raw", k_rec709_xy, result);
+    EXPECT_FALSE(s.ok());
+    EXPECT_FALSE(result);
+    EXPECT_NE(s.message().find("'raw'"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("data"), std::string::npos) << s.message();
+    s = filmgrain::ocio::compare_chromaticities("", "ADX10", k_rec709_xy, result);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("not to black"), std::string::npos) << s.message();
+    s = filmgrain::ocio::compare_chromaticities("", "nope", k_rec709_xy, result);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("unknown colour space 'nope'"), std::string::npos) << s.message();
+}
+
+TEST_F(OcioTest, InvalidChromaticities)
+{
+    struct Case {
+        Chromaticities xy;
+        std::vector<std::string> words;
+    };
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const std::vector<Case> cases = {
+        { { 0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.0 }, { "white y = 0", "> 0" } },
+        { { 0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, -0.3 }, { "white y = -0.3" } },
+        { { 0.64, 0.33, nan, 0.60, 0.15, 0.06, 0.3127, 0.3290 }, { "green x = nan", "finite" } },
+        // Collinear primaries.
+        { { 0.6, 0.3, 0.4, 0.4, 0.2, 0.5, 0.3127, 0.3290 }, { "on one line" } },
+        // The white on the line from red to green.
+        { { 0.6, 0.4, 0.2, 0.8, 0.15, 0.06, 0.4, 0.6 }, { "white lies on the line" } },
+    };
+    for (const Case& c : cases) {
+        std::unique_ptr<InputConverter> conv = make("", "sRGB");
+        Status s = InputConverter::create_from_chromaticities("", c.xy, conv);
+        ASSERT_FALSE(s.ok());
+        EXPECT_FALSE(conv);
+        for (const std::string& w : c.words)
+            EXPECT_NE(s.message().find(w), std::string::npos) << s.message();
+    }
+    std::unique_ptr<InputConverter> conv;
+    Status s = InputConverter::create_from_chromaticities("", k_rec709_xy, conv, -1.0);
+    ASSERT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("tolerance_xy = -1"), std::string::npos) << s.message();
+}
+
+TEST_F(OcioTest, ChromaticitiesNeedAces2065InTheConfig)
+{
+    TempDir dir("noaces");
+    const std::string path = write_file(dir.path() / "user.ocio", k_user_config);
+    std::unique_ptr<InputConverter> conv;
+    Status s = InputConverter::create_from_chromaticities(path, k_rec709_xy, conv);
+    ASSERT_FALSE(s.ok());
+    EXPECT_FALSE(conv);
+    EXPECT_NE(s.message().find(path), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("aces_interchange"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("ACES2065-1"), std::string::npos) << s.message();
+
+    // A colour space named ACES2065-1 is enough (no role): here my_lin is
+    // taken to be AP0 itself, so AP0 chromaticities need no conversion.
+    std::string text = k_user_config;
+    text += "  - !<ColorSpace>\n    name: ACES2065-1\n";
+    const std::string named = write_file(dir.path() / "named.ocio", text);
+    auto ap0 = make_xy(named, k_ap0_xy);
+    ASSERT_TRUE(ap0);
+    EXPECT_TRUE(ap0->is_noop());
+    EXPECT_EQ(ap0->via_colorspace(), "ACES2065-1");
+    auto rec709 = make_xy(named, k_rec709_xy);
+    ASSERT_TRUE(rec709);
+    EXPECT_FALSE(rec709->is_noop());
 }

@@ -128,7 +128,7 @@ const std::vector<OptionSpec>& option_table()
           } },
         { "--iscolorspace", nullptr, "NAME",
           "Colour space of INPUT (default: the file's oiio:ColorSpace when the config knows "
-          "it, else scene_linear)",
+          "it, else an EXR's chromaticities (its primaries and white), else scene_linear)",
           [](CliArgs& a, const std::string&, const char* v) {
               Status s           = once(a.has_iscolorspace, "--iscolorspace");
               a.has_iscolorspace = true;

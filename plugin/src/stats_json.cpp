@@ -44,6 +44,9 @@ std::string stats_json(const RunReport& r)
                             { "rounded", r.data_window_rounded } };
     j["input"]          = { { "file", r.input_file },
                             { "colorspace", r.input_colorspace },
+                            { "chromaticities", r.input_chromaticities
+                                                    ? Json(*r.input_chromaticities)
+                                                    : Json(nullptr) },
                             { "pixels_read", r.render.input.pixels_read },
                             { "nonfinite_pixels", r.render.input.nonfinite_pixels },
                             { "nan_pixels", r.render.input.nan_pixels },

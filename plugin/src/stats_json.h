@@ -8,14 +8,16 @@
 //   scan {width, height, pitch_x_um, pitch_y_um},
 //   roi {x, y, width, height},
 //   data_window {x, y, width, height, exact [x0, y0, x1, y1], rounded},
-//   input {file, colorspace, pixels_read, nonfinite_pixels, nan_pixels,
-//          saturated_pixels, negative_pixels, denormal_pixels},
+//   input {file, colorspace, chromaticities, pixels_read, nonfinite_pixels,
+//          nan_pixels, saturated_pixels, negative_pixels, denormal_pixels},
 //   layers [{name, grains, developed, absorbed_photons, kinetics_events,
 //            decided_early, mean_density, path, reason, error_estimate,
 //            setup_seconds, estimated_seconds}]
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "filmgrain/imagebufalgo_filmgrain.h"
@@ -44,7 +46,14 @@ struct RunReport {
     double data_window_exact[4] = { 0.0, 0.0, 0.0, 0.0 };
     bool data_window_rounded    = false;
     std::string input_file;  ///< path, or "wedge" or "chart"
+    /// The OCIO colour space INPUT was read as ("scene_linear" for the wedge
+    /// and the chart), or "chromaticities" when converted from the file's.
     std::string input_colorspace;
+    /// The file's chromaticities (red x, y, green x, y, blue x, y, white x,
+    /// y) when they decided its colour: converted from, or found to be
+    /// scene_linear's. Unset when it has none or a colour space name
+    /// (--iscolorspace, oiio:ColorSpace) decided.
+    std::optional<std::array<double, 8>> input_chromaticities;
     /// --filmgrain:output= (output_kind_name).
     std::string output = "density";
     RenderStats render;

@@ -72,9 +72,10 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert set(s["seconds"]) == {"read", "color", "simulate", "write", "total"}
     assert set(s["scan"]) == {"width", "height", "pitch_x_um", "pitch_y_um"}
     assert set(s["roi"]) == {"x", "y", "width", "height"}
-    assert set(s["input"]) == {"file", "colorspace", "pixels_read", "nonfinite_pixels",
-                               "nan_pixels", "saturated_pixels", "negative_pixels",
-                               "denormal_pixels"}
+    assert set(s["input"]) == {"file", "colorspace", "chromaticities", "pixels_read",
+                               "nonfinite_pixels", "nan_pixels", "saturated_pixels",
+                               "negative_pixels", "denormal_pixels"}
+    assert s["input"]["chromaticities"] is None  # the ramp has none
     assert s["engine"] == "auto" and s["stock"] == "vision3-500t" and s["seed"] == 42
     for layer in s["layers"]:  # which path ran, why, and its error bound
         assert "kinetics=" in layer["path"] and layer["reason"]

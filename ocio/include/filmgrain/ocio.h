@@ -16,10 +16,19 @@
 //      lin_rec709 (scene-linear Rec.709, D65), ACEScg, ACES2065-1, ADX10,
 //      ADX16, sRGB, raw; display sRGB with views "ACES 1.0 - SDR Video" (the
 //      default) and Raw.
+//
+// Chromaticities (InputConverter::create_from_chromaticities,
+// compare_chromaticities): RGB said only by its primaries and white, as an
+// OpenEXR header's `chromaticities` says it, is placed in a config through
+// ACES2065-1: the config's `aces_interchange` role, else a colour space
+// named (or aliased) "ACES2065-1". Its AP0 primaries and white are published
+// (SMPTE ST 2065-1), so RGB -> CIE XYZ -> AP0 is computed here; the config
+// says how ACES2065-1 reaches its other spaces.
 #pragma once
 
 #include <filmgrain/status.h>
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -37,6 +46,20 @@ struct ConfigInfo {
     /// embedded config.
     std::string path;
 };
+
+/// CIE 1931 xy chromaticities of an RGB colour space, dimensionless, in the
+/// order of OpenEXR's `chromaticities` header attribute (OpenImageIO:
+/// "chromaticities", FLOAT[8]): red x, y, green x, y, blue x, y, white x, y.
+/// E.g. Rec.709 / sRGB: {0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290}.
+using Chromaticities = std::array<double, 8>;
+
+/// Largest difference, in x or in y, between two sets of chromaticities that
+/// still counts as the same colour space (no conversion). 1e-3 is far above
+/// the rounding of chromaticities written as floats or with 4-5 decimals
+/// (e.g. D65 as 0.3127, 0.3290 or 0.31271, 0.32902) and far below the
+/// smallest difference between the RGB spaces in use (Rec.709 and P3 differ
+/// by 0.04 in green x).
+constexpr double k_chromaticities_tolerance_xy = 1e-3;
 
 /// Converts pixels from a named colour space to the config's scene_linear
 /// role. The OCIO processor is built once in create(); apply_*() then run it
@@ -65,6 +88,35 @@ public:
     static Status create(const std::string& config_path,
                          const std::string& src_colorspace,
                          std::unique_ptr<InputConverter>& out);
+
+    /// Loads the config and builds the conversion of RGB that is defined
+    /// only by its primaries and white `xy` (see Chromaticities) to the
+    /// config's scene_linear: RGB -> CIE XYZ from the primaries and white
+    /// (SMPTE RP 177), Bradford chromatic adaptation from `xy`'s white to
+    /// scene_linear's, XYZ -> ACES2065-1 (AP0 primaries and white of SMPTE
+    /// ST 2065-1), then the config's own ACES2065-1 -> scene_linear.
+    /// scene_linear's white is where OCIO takes its RGB (1, 1, 1), so white
+    /// stays (1, 1, 1) in any config; the adaptation composes exactly with
+    /// the config's own when that is Bradford too (the embedded config's is).
+    /// When `xy` describes scene_linear itself (compare_chromaticities within
+    /// tolerance_xy) the converter is a no-op: is_noop() is true and pixels
+    /// are left bit-identical.
+    /// xy: finite; the white's y > 0; the three primaries not on one line
+    ///   (a primary's y may be 0 or negative: XYZ's are (1, 0), (0, 1),
+    ///   (0, 0), ACES AP0's blue has y = -0.077).
+    /// tolerance_xy: >= 0 (0: convert unless exactly equal).
+    /// out: set to the new converter on success, reset on failure.
+    /// Errors (naming the config) as create(), and when the config has
+    /// neither an aces_interchange role nor an ACES2065-1 colour space, when
+    /// scene_linear is data or not linear from black, or when xy is invalid
+    /// (naming the value and the rule).
+    /// source_colorspace() is then "" and via_colorspace() names the ACES
+    /// space used. Thread safety: as create().
+    static Status create_from_chromaticities(const std::string& config_path,
+                                             const Chromaticities& xy,
+                                             std::unique_ptr<InputConverter>& out,
+                                             double tolerance_xy
+                                             = k_chromaticities_tolerance_xy);
 
     ~InputConverter();
     InputConverter(const InputConverter&)            = delete;
@@ -95,8 +147,13 @@ public:
     /// The config this converter was built from.
     const ConfigInfo& config() const;
 
-    /// The source colour space exactly as the caller gave it.
+    /// The source colour space exactly as the caller gave it; "" when built
+    /// by create_from_chromaticities.
     const std::string& source_colorspace() const;
+
+    /// create_from_chromaticities: the config's colour space for ACES2065-1
+    /// that the conversion went through (e.g. "ACES2065-1"); "" otherwise.
+    const std::string& via_colorspace() const;
 
     /// The name of the colour space the config's scene_linear role resolves to
     /// (e.g. "lin_rec709" in the embedded config).
@@ -156,6 +213,22 @@ private:
 /// success). Errors only when the config cannot be loaded.
 Status find_colorspace(const std::string& config_path, const std::string& name,
                        std::string& resolved, ConfigInfo* info = nullptr);
+
+/// Whether RGB with chromaticities `xy` is the same RGB as `colorspace` of
+/// the config that config_path selects. Both are taken to ACES2065-1 (see
+/// the top of this header; `colorspace` by OCIO, probing its RGB (0, 0, 0),
+/// (1, 0, 0), (0, 1, 0), (0, 0, 1)), xy's white adapted (Bradford) to where
+/// `colorspace`'s white lands; `same` is true when every primary's x and y
+/// then agree within tolerance_xy. A curve such as sRGB's keeps 0 and 1,
+/// so it is compared by its primaries.
+/// same: set on success, false on failure.
+/// Errors: the config cannot be loaded, has no ACES2065-1 (as
+/// create_from_chromaticities), does not know `colorspace`, or `colorspace`
+/// has no primaries to compare (data, or black not black: a log encoding);
+/// xy invalid. Thread safety: as InputConverter::create.
+Status compare_chromaticities(const std::string& config_path, const std::string& colorspace,
+                              const Chromaticities& xy, bool& same,
+                              double tolerance_xy = k_chromaticities_tolerance_xy);
 
 /// The embedded minimal config (OCIO v2 YAML), exactly as in
 /// ocio/src/filmgrain_minimal.ocio at build time; for --help, debugging and
