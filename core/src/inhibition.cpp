@@ -73,7 +73,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         std::vector<double>& d = blurred[j];
         if (stock.inhibitor_diffusion_um > 0.0)
             d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
-                             stock.inhibitor_diffusion_um, 0.0, 0.0, HalationKernel::disc);
+                             stock.inhibitor_diffusion_um, HalationSpec());
         for (double& v : d)
             v += fog[j];
     });

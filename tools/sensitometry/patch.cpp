@@ -6,6 +6,8 @@
 #include <cmath>
 #include <thread>
 
+#include "light_spread.h"
+
 namespace filmgrain::sensitometry {
 
 double patch_margin_um(const Stock& stock, double pitch_um)
@@ -21,12 +23,13 @@ double patch_margin_um(const Stock& stock, double pitch_um)
 
 double patch_spread_reach_um(const Stock& stock)
 {
-    // The kernels' truncation (core/src/light_spread.h: 6 sigma) and
+    // The kernels' truncation (core/src/light_spread.h: 6 sigma; the base
+    // kernel's reach, where kBaseHalationTail of its light is cut) and
     // radius; inhibition blurs densities made from the spread exposure.
     double spread_um = 0.0;
     for (const Layer& layer : stock.layers)
         spread_um = std::max(spread_um, (layer.scatters() ? 6.0 * layer.scatter_sigma_um : 0.0)
-                                            + (layer.halates() ? layer.halation_radius_um : 0.0));
+                                            + layer_halation(stock, layer).reach_um());
     return spread_um + (stock.inhibits() ? 6.0 * stock.inhibitor_diffusion_um : 0.0);
 }
 
