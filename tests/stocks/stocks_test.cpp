@@ -186,7 +186,9 @@ TEST(Datasheet, CurvePointsAreReadOffTheStocksCurve)
 // layer with halation h measures as the same layer with its sensitivity
 // times 1 + h (every figure: curves, speed, granularity, inhibition), and
 // its speed point lies log10(1 + h) lower than without it (to the chain
-// tables' bound: 0.176 here, about 6 times that bound).
+// tables' bound: 0.176 here, about 6 times that bound). The halo is the
+// stock's own kernel, the film base's (docs/model.md), as a disc's would
+// be: every kernel is normalised.
 TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
 {
     const sm::Datasheet sheet = datasheet("kodak-vision3-500t-5219.json");
@@ -195,8 +197,8 @@ TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
     for (Layer& l : plain.layers)  // without the stock's own spread
         l.scatter = l.scatter_sigma_um = l.halation = l.halation_radius_um = 0.0;
     Stock halo = plain, brighter = plain;
+    ASSERT_EQ(halo.layers[0].halation_kernel, HalationKernel::base);
     halo.layers[0].halation           = 0.5;
-    halo.layers[0].halation_radius_um = 220.0;
     halo.layers[0].scatter            = 0.25;
     halo.layers[0].scatter_sigma_um   = 5.0;
     for (double& w : brighter.layers[0].sensitivity)
