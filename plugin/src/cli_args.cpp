@@ -137,6 +137,34 @@ const std::vector<OptionSpec>& option_table()
                   s = Status::error("--iscolorspace: empty colour space name");
               return s;
           } },
+        { "--subimage", nullptr, "N|NAME",
+          "Part of a multi-part INPUT to read, by index (from 0) or name (as oiiotool's "
+          "--subimage; default: the first part with the channels)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s = once(!a.input_selection.subimage.empty(), "--subimage");
+              a.input_selection.subimage = v;
+              if (s && a.input_selection.subimage.empty())
+                  s = Status::error("--subimage: empty part name");
+              return s;
+          } },
+        { "--view", nullptr, "NAME",
+          "View of a multi-view INPUT to read (default: the file's default view, the first it "
+          "lists)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s               = once(!a.input_selection.view.empty(), "--view");
+              a.input_selection.view = v;
+              if (s && a.input_selection.view.empty())
+                  s = Status::error("--view: empty view name");
+              return s;
+          } },
+        { "--ch", nullptr, "R,G,B|Y",
+          "Channels of INPUT to read as red, green and blue, or one as grey, by name (as "
+          "oiiotool's --ch; default: R, G, B, else Y, of the view)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              if (Status s = once(!a.input_selection.channels.empty(), "--ch"); !s)
+                  return s;
+              return parse_channel_list(v, a.input_selection.channels);
+          } },
         { "--ocolorspace", nullptr, "NAME",
           "Colour space of the output=regrain positive (default: the config's scene_linear); "
           "only with output=regrain",
@@ -171,7 +199,8 @@ const std::vector<OptionSpec>& option_table()
           } },
         { "-o", nullptr, "FILE.exr",
           "Output OpenEXR file (required to render; written atomically: created unnamed in "
-          "its directory and linked into place when complete). Modifier :compression=NAME",
+          "its directory and linked into place when complete). Modifiers go on the option, "
+          "as oiiotool's: -o:compression=NAME FILE.exr",
           [](CliArgs& a, const std::string& flag, const char* v) {
               if (Status s = once(!a.output.empty(), "-o"); !s)
                   return s;
@@ -210,8 +239,9 @@ const std::vector<OptionSpec>& option_table()
           } },
         { "--dry-run", nullptr, "",
           "Render nothing: print on stdout, one JSON object per line, each image the command "
-          "would render (frame, input, output, stats, preview, input_exists, settings_hash, "
-          "up_to_date as --skip-existing judges it) and exit. For scripts and farms",
+          "would render (frame, input, output, stats, preview, input_exists, error: what the "
+          "render would refuse from the input's header, else null; settings_hash, up_to_date "
+          "as --skip-existing judges it) and exit. For scripts and farms",
           [](CliArgs& a, const std::string&, const char*) {
               a.dry_run = true;
               return Status();
@@ -417,6 +447,12 @@ Status validate_render_args(const CliArgs& a)
         return Status::error("--iscolorspace applies to INPUT; the --wedge is scene-linear");
     if (a.chart && a.has_iscolorspace)
         return Status::error("--iscolorspace applies to INPUT; the --chart is scene-linear");
+    const InputSelection& sel = a.input_selection;
+    if ((a.wedge || a.chart)
+        && (!sel.subimage.empty() || !sel.view.empty() || !sel.channels.empty()))
+        return Status::errorf("--subimage, --view and --ch choose what to read of INPUT; the ",
+                              a.wedge ? "--wedge" : "--chart", " has one part, one view and ",
+                              "its own channels");
     if (!a.has_filmgrain)
         return Status::error("no --filmgrain command given: nothing to do (--filmgrain alone "
                              "renders with the defaults)");
@@ -426,6 +462,12 @@ Status validate_render_args(const CliArgs& a)
                               ": densities and ADX code values have no colour space to choose)");
     if (a.output.empty())
         return Status::error("no output given: -o FILE.exr is required");
+    // oiiotool's modifiers go on the option: -o:compression=zip out.exr.
+    const size_t colon = a.output.find(':');
+    if (colon != std::string::npos && lowercase_extension(a.output.substr(0, colon)) == ".exr")
+        return Status::errorf("-o ", a.output, ": modifiers go on the option, before the file "
+                              "name: -o", a.output.substr(colon), " ",
+                              a.output.substr(0, colon));
     if (lowercase_extension(a.output) != ".exr")
         return Status::errorf("output '", a.output,
                               "' must be an OpenEXR file (.exr): it holds density data, "
@@ -456,9 +498,10 @@ std::string help_text()
     std::ostringstream out;
     out << "filmgrain " << version_string()
         << " -- physically based per-grain film simulation\n\n"
-        << "Usage: filmgrain INPUT [--colorconfig FILE] [--iscolorspace NAME]\n"
+        << "Usage: filmgrain INPUT [--subimage N|NAME] [--view NAME] [--ch R,G,B|Y]\n"
+        << "                 [--colorconfig FILE] [--iscolorspace NAME]\n"
         << "                 --filmgrain[:key=value...] [--ocolorspace NAME]\n"
-        << "                 [-d half|float] -o OUTPUT.exr\n"
+        << "                 [-d half|float] -o[:compression=NAME] OUTPUT.exr\n"
         << "                 [--stats FILE.json] [--preview FILE.png] [--threads N]\n"
         << "                 [--progress] [-q]\n"
         << "       filmgrain PLATE.####.exr --frames LIST --filmgrain[:...] -o NEG.####.exr\n"

@@ -333,6 +333,18 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
         dst.errorfmt("filmgrain: {}", s.message());
         return false;
     }
+    if (stats) {
+        // The core read the window over the film; the pixels read are those
+        // of src's data window in it (the rest of the film is no light).
+        const OIIO::ImageSpec& in = src.spec();
+        const int64_t dx0 = in.x - film.film_x, dy0 = in.y - film.film_y;
+        const int64_t w   = std::min<int64_t>(window.x_end, dx0 + in.width)
+                          - std::max<int64_t>(window.x_begin, dx0);
+        const int64_t h   = std::min<int64_t>(window.y_end, dy0 + in.height)
+                          - std::max<int64_t>(window.y_begin, dy0);
+        stats->input.pixels_read = static_cast<uint64_t>(std::max<int64_t>(0, w))
+                                   * static_cast<uint64_t>(std::max<int64_t>(0, h));
+    }
     return true;
 }
 

@@ -9,7 +9,8 @@ MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "width_m
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
              "tile", "output"]
 
-OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--ocolorspace", "--filmgrain", "-d", "-o",
+OPTIONS = ["--wedge", "--chart", "--subimage", "--view", "--ch", "--colorconfig", "--iscolorspace",
+           "--ocolorspace", "--filmgrain", "-d", "-o",
            "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
            "--list-stocks", "--print-stock", "--version", "--help"]
 
