@@ -120,7 +120,7 @@ std::vector<float> spread(const Layer& layer, const std::vector<float>& img, int
     const ImageView view { img.data(), w, h, 1 };
     return spread_exposure(layer,
                            LayerExposure(view, { 1.0, 0.0, 0.0 }, pitch_um,
-                                         std::numeric_limits<double>::infinity()),
+                                         std::numeric_limits<double>::infinity(), FrameEdge::gate),
                            w, h, pitch_um);
 }
 

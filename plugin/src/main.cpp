@@ -581,7 +581,8 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                       { "frame_width_mm", sc.frame_width_mm },
                       { "seed", sc.seed },
                       { "frame", sc.frame ? Json(*sc.frame) : Json(nullptr) },
-                      { "static", sc.static_grain } };
+                      { "static", sc.static_grain },
+                      { "edge", frame_edge_name(sc.edge) } };
     j["engine"]   = { { "engine", engine_name(e.engine) },
                       { "tolerance", e.tolerance },
                       { "kinetics", e.kinetics ? kinetics_method_name(*e.kinetics) : "" },

@@ -207,6 +207,15 @@ bool parse_static(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return true;
 }
 
+bool parse_edge(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (!parse_frame_edge(std::string(v), cmd.scene.edge)) {
+        why = "must be clamp or gate";
+        return false;
+    }
+    return true;
+}
+
 bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     cmd.has_width_mm = true;
@@ -438,6 +447,12 @@ const Modifier kModifiers[] = {
     { "static", "0|1", "1: the same grain on every frame (the seed as is, frame ignored)",
       [](const FilmgrainCommand& d) { return std::string(d.scene.static_grain ? "1" : "0"); },
       parse_static },
+    { "edge", "clamp|gate",
+      "beyond the input's data window (MODEL.md 2): clamp = the scene continues, each point "
+      "exposed as the nearest edge pixel (a plate is a crop of the picture the lens made); "
+      "gate = no light (a frame's hard edge inside a camera gate)",
+      [](const FilmgrainCommand& d) { return std::string(frame_edge_name(d.scene.edge)); },
+      parse_edge },
     { "width_mm", "MM", "width of the film frame, millimetres, (0, 1e9]",
       [](const FilmgrainCommand& d) { return format_number(d.scene.frame_width_mm); },
       parse_width_mm },

@@ -84,6 +84,8 @@ TEST(Modifiers, Forms)
     EXPECT_EQ(parse_ok("--filmgrain:frame=1000000000").scene.frame, 1000000000);
     EXPECT_TRUE(parse_ok("--filmgrain:frame=1:static=1").scene.static_grain);
     EXPECT_FALSE(parse_ok("--filmgrain:static=0").scene.static_grain);
+    EXPECT_EQ(parse_ok("--filmgrain:edge=gate").scene.edge, FrameEdge::gate);
+    EXPECT_EQ(parse_ok("--filmgrain").scene.edge, FrameEdge::clamp);
 }
 
 TEST(Modifiers, UnknownModifierNamesItAndListsTheValidOnes)
@@ -118,6 +120,7 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:frame=1.5", { "frame=1.5", "whole number", "N" } },
         { "--filmgrain:frame=--1", { "frame=--1", "whole number", "N" } },
         { "--filmgrain:static=2", { "static=2", "0 or 1", "0|1" } },
+        { "--filmgrain:edge=wrap", { "edge=wrap", "clamp or gate", "clamp|gate" } },
         { "--filmgrain:scan=0x0", { "scan=0x0", "at least 1", "WxH" } },
         { "--filmgrain:scan=10x", { "scan=10x", "height", "WxH" } },
         { "--filmgrain:scan=x10", { "scan=x10", "width", "WxH" } },
@@ -165,7 +168,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
 {
     const auto docs = filmgrain_modifier_docs();
     const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "frame",
-                           "static",   "width_mm",
+                           "static",   "edge",     "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
                            "photons",  "coverage", "grains",  "scale",    "samples",
                            "tile",     "output" };
@@ -189,6 +192,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
     EXPECT_EQ(default_of("engine"), engine_name(RenderSettings().engine));
     EXPECT_EQ(default_of("tile"), std::to_string(RenderSettings().tile_size_px));
     EXPECT_EQ(default_of("static"), "0");
+    EXPECT_EQ(default_of("edge"), "clamp");
 }
 
 TEST(Modifiers, OutputModifiers)

@@ -202,6 +202,7 @@ def render(
     seed=None,
     frame=None,
     static=None,
+    edge=None,
     width_mm=None,
     scan=None,
     roi=None,
@@ -247,6 +248,9 @@ def render(
             of frame N is frame_seed(seed, N), the same as the CLI's
             ``frame=N`` and ``--frames``. Default: a single image.
         static: with frame: True keeps one grain pattern on every frame.
+        edge: beyond the image (MODEL.md 2): "clamp" (the default: the
+            scene continues, each point exposed as the nearest edge pixel)
+            or "gate" (no light: a camera gate's hard edge).
         width_mm: width of the film frame, millimetres (float), (0, 1e9].
         scan: output size over the whole frame: (width, height), width
             (int: the frame's aspect) or "WxH". Default: the input's size.
@@ -304,6 +308,7 @@ def render(
         seed=seed,
         frame=frame,
         static=static,
+        edge=edge,
         width_mm=width_mm,
         scan=scan,
         roi=roi,
@@ -369,8 +374,9 @@ def render_imagebuf(buf, *, stock=None, threads=0, progress=None, ocolorspace=No
     Python types is involved. buf must be scene-linear (convert first, e.g.
     with ``OpenImageIO.ImageBufAlgo.colorconvert``); its display window is
     the film frame and its data window is placed in it, as the C++
-    operator ``filmgrain::IBA::filmgrain`` does (pixels outside the data
-    window are black). Keywords as for :func:`render`.
+    operator ``filmgrain::IBA::filmgrain`` does (beyond the data window the
+    scene continues, or with ``edge="gate"`` there is no light); the
+    negative covers the data window. Keywords as for :func:`render`.
 
     Returns: (ImageBuf, stats): a float ImageBuf with one channel per stock
     layer, named after the layer, its display window the whole scan and its

@@ -5,7 +5,7 @@ import re
 
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
-MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "width_mm", "scan", "roi",
+MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "edge", "width_mm", "scan", "roi",
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
              "tile", "output"]
 
