@@ -751,6 +751,10 @@ struct RenderContext {
     /// output=regrain's expected curves, built by the first frame.
     std::shared_ptr<std::vector<ExpectedCurve>> regrain_curves
         = std::make_shared<std::vector<ExpectedCurve>>();
+    /// output=adx10|adx16's printing density transform (MODEL.md 11),
+    /// built by the first frame.
+    std::shared_ptr<std::optional<AdxTransform>> adx_transform
+        = std::make_shared<std::optional<AdxTransform>>();
 };
 
 /// Identifies what an output was made from, for --skip-existing: a SHA-1
@@ -789,6 +793,12 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                                 : Json(nullptr);
     j["output"]   = { { "kind", output_kind_name(cmd.output) },
                       { "ocolorspace", a.has_ocolorspace ? a.ocolorspace : "" } };
+    // ADX is printing density with ADX's gains since MODEL.md 11 (issue
+    // 40): files written before (Status M, no gains) are not up to date.
+    // Density and regrain outputs keep their hashes.
+    if (cmd.output == OutputKind::adx10 || cmd.output == OutputKind::adx16)
+        j["output"]["adx"] = { { "encoding", "apd, k (1, 0.92, 0.95)" },
+                               { "timing", adx_timing_name(cmd.timing) } };
     j["type"]     = a.output_type == OutputType::half16 ? "half" : "float";
     j["compression"] = a.output_modifiers.compression;
     const char* ocio_env = std::getenv("OCIO");
@@ -964,7 +974,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     OIIO::ImageBuf& result = cmd.output == OutputKind::density ? dst : transformed;
     OutputReport output_report;
     if (Status s = apply_output(
-            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves }, opts,
+            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves,
+                            cmd.timing, ctx.adx_transform },
+            opts,
             src, dst, result, output_report);
         !s)
         return s;

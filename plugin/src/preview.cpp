@@ -92,7 +92,7 @@ Status make_film_preview(const float* density, int64_t width, int64_t height,
         return Status();
     };
     std::array<int, 3> layers {};
-    if (Status s = adx_layers(names, layers); !s)
+    if (Status s = printing_density_layers(names, layers); !s)
         return fallback(s.message());
     std::string adx;
     if (Status s = ocio::find_colorspace(colorconfig, "ADX10", adx); !s)
@@ -113,8 +113,12 @@ Status make_film_preview(const float* density, int64_t width, int64_t height,
 
     const size_t npix = static_cast<size_t>(width) * static_cast<size_t>(height);
     std::vector<float> rgb(npix * 3);
-    encode_adx(density, npix, static_cast<int>(names.size()), layers, d_min,
-               adx_encoding(OutputKind::adx10), rgb.data());
+    // Status M above D-min as it is (no map, gains 1), untimed.
+    const AdxTransform t = make_adx_transform(nullptr, layers, { d_min[static_cast<size_t>(layers[0])],
+                                                                 d_min[static_cast<size_t>(layers[1])],
+                                                                 d_min[static_cast<size_t>(layers[2])] },
+                                              { 1.0, 1.0, 1.0 }, nullptr);
+    encode_adx(t, kAdx10, density, npix, static_cast<int>(names.size()), true, rgb.data());
     conv->apply_rgb(rgb.data(), npix);
     out          = Preview();
     out.width    = width;
