@@ -593,13 +593,17 @@ std::string help_text()
                    "filmgrain:colorspace names the colour space.");
     out << "\nPreview:\n";
     append_wrapped(out, "    ",
-                   "The negative as a positive through OCIO: density above D-min -> ADX10 (as "
-                   "output=adx10) -> the config's ADX10 colour space -> the config's default "
-                   "display and its default view (embedded config: sRGB, ACES 1.0 - SDR Video), "
-                   "8-bit PNG. Without an ADX10 colour space in the config, or for a stock whose "
-                   "layers are not R, G, B (nor one layer), a plain inversion, with a warning: "
-                   "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the 99.9th "
-                   "percentile of the density over all layers, encoded as p^(1/2.2).");
+                   "The negative as a timed print through OCIO: density -> ADX16 as "
+                   "output=adx16:timing=grey (unrounded; the stock's 18% grey lands on ACES "
+                   "0.18 in every channel; a one-layer stock with gains 1, so silver stays "
+                   "neutral) -> the config's ADX16 colour space (ADX10 without one) -> the "
+                   "config's default display and its default view (embedded config: sRGB, "
+                   "ACES 1.0 - SDR Video), 8-bit PNG. An exposure offset shows (the timing is "
+                   "the stock's, not the frame's). Without an ADX colour space in the config, "
+                   "or for a stock whose layers are not R, G, B (nor one layer), a plain "
+                   "inversion, with a warning: p = clamp((D - base density) / (D_hi - base "
+                   "density), 0, 1), D_hi the 99.9th percentile of the density over all layers, "
+                   "encoded as p^(1/2.2).");
     out << "\nProgress and messages go to stderr; errors read 'filmgrain: error: ...'.\n"
         << "On any error or interruption no output file (-o, --stats, --preview) of the\n"
         << "image being rendered is created. Progress shows on a terminal once a run takes\n"
