@@ -460,6 +460,12 @@ Status validate_render_args(const CliArgs& a)
         return Status::errorf("--ocolorspace ", a.ocolorspace, " applies to output=regrain only "
                               "(the output is ", output_kind_name(a.filmgrain.output),
                               ": densities and ADX code values have no colour space to choose)");
+    if (a.filmgrain.timing != AdxTiming::off && a.filmgrain.output != OutputKind::adx10
+        && a.filmgrain.output != OutputKind::adx16)
+        return Status::errorf("timing=", adx_timing_name(a.filmgrain.timing),
+                              " applies to output=adx10 and adx16 only (the output is ",
+                              output_kind_name(a.filmgrain.output),
+                              "; --preview is always timed on grey)");
     if (a.output.empty())
         return Status::error("no output given: -o FILE.exr is required");
     // oiiotool's modifiers go on the option: -o:compression=zip out.exr.
@@ -594,19 +600,26 @@ std::string help_text()
                    "filmgrain:version. Overscan (a data window beyond the display window) is "
                    "rendered too, at negative coordinates and beyond the scan.");
     append_wrapped(out, "    ",
-                   "adx10, adx16: Academy Density Exchange (SMPTE ST 2065-3), channels R, G, B: "
-                   "code value = 95 + 500 D (adx10) or 1520 + 8000 D (adx16), rounded, clamped "
-                   "to [0, 1023] or [0, 65535] (clamped values are counted in a warning) and "
-                   "stored divided by 1023 or 65535, as OCIO's ADX10 / ADX16 colour spaces (ACES "
-                   "configs, and the embedded one) read them to bring the scan to ACES2065-1. D "
-                   "is the density above D-min: the layer's density minus its expected density "
-                   "at zero exposure (base + fog, from the model). R, G, B are the layers named "
-                   "R, G and B (the colour-negative preset's red-, green- and blue-sensitive "
-                   "layers: the dye a red-sensitive layer forms absorbs red, so its density "
-                   "stands for the red printing density; filmgrain's layers are silver, so this "
-                   "is an approximation). A one-layer stock gives R = G = B (silver is neutral); "
-                   "other stocks are refused. filmgrain:colorspace (and oiio:ColorSpace in "
-                   "memory) is ADX10 or ADX16.");
+                   "adx10, adx16: Academy Density Exchange (SMPTE ST 2065-3; MODEL.md 11), "
+                   "channels R, G, B: code value = 95 + 500 CDD (adx10) or 1520 + 8000 CDD "
+                   "(adx16), rounded, clamped to [0, 1023] or [0, 65535] (clamped values are "
+                   "counted in a warning) and stored divided by 1023 or 65535, as OCIO's ADX10 / "
+                   "ADX16 colour spaces (ACES configs, and the embedded one) read them to bring "
+                   "the scan to ACES2065-1. CDD = k (APD - APD D-min), k = (1, 0.92, 0.95) "
+                   "(S-2008-002 eq. 1): APD, the Academy Printing Density, is the stock's map "
+                   "of its Status M layer densities (its key printing_density: APD = M StM + "
+                   "o, S-2008-002 Annex C, published per stock; vision3-500t, no-remjet: "
+                   "5219's, vision3-250d: 5207's); a stock without one reads APD = Status M. "
+                   "D-min is each layer's expected density at zero exposure (base + fog, from "
+                   "the model). R, G, B are the layers named R, G and B; a one-layer stock "
+                   "gives R = G = B (its gains still apply, as an ADX scanner's would). "
+                   "timing=grey adds per-channel printer lights that put the stock's own 18% "
+                   "grey card (its expected densities at exposure offset 0) on CDD 0.70 "
+                   "(ADX16 7120, ACES 0.18). Metadata: filmgrain:colorspace (and "
+                   "oiio:ColorSpace in memory) ADX10 or ADX16, filmgrain:printing_density "
+                   "(annex_c, or status_m (no map)), filmgrain:adx_dmin (Status M), "
+                   "filmgrain:apd_dmin, filmgrain:adx_gains, filmgrain:adx_timing (off, or "
+                   "the CDD added per channel).");
     append_wrapped(out, "    ",
                    "regrain: a scene-linear positive whose local mean is the input and whose "
                    "fluctuation is the film's grain, for comp to add to a clean element. Each "
@@ -623,13 +636,17 @@ std::string help_text()
                    "filmgrain:colorspace names the colour space.");
     out << "\nPreview:\n";
     append_wrapped(out, "    ",
-                   "The negative as a positive through OCIO: density above D-min -> ADX10 (as "
-                   "output=adx10) -> the config's ADX10 colour space -> the config's default "
-                   "display and its default view (embedded config: sRGB, ACES 1.0 - SDR Video), "
-                   "8-bit PNG. Without an ADX10 colour space in the config, or for a stock whose "
-                   "layers are not R, G, B (nor one layer), a plain inversion, with a warning: "
-                   "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the 99.9th "
-                   "percentile of the density over all layers, encoded as p^(1/2.2).");
+                   "The negative as a timed print through OCIO: density -> ADX16 as "
+                   "output=adx16:timing=grey (unrounded; the stock's 18% grey lands on ACES "
+                   "0.18 in every channel; a one-layer stock with gains 1, so silver stays "
+                   "neutral) -> the config's ADX16 colour space (ADX10 without one) -> the "
+                   "config's default display and its default view (embedded config: sRGB, "
+                   "ACES 1.0 - SDR Video), 8-bit PNG. An exposure offset shows (the timing is "
+                   "the stock's, not the frame's). Without an ADX colour space in the config, "
+                   "or for a stock whose layers are not R, G, B (nor one layer), a plain "
+                   "inversion, with a warning: p = clamp((D - base density) / (D_hi - base "
+                   "density), 0, 1), D_hi the 99.9th percentile of the density over all layers, "
+                   "encoded as p^(1/2.2).");
     out << "\nProgress and messages go to stderr; errors read 'filmgrain: error: ...'.\n"
         << "On any error or interruption no output file (-o, --stats, --preview) of the\n"
         << "image being rendered is created. Progress shows on a terminal once a run takes\n"

@@ -515,18 +515,21 @@ Status write_image(OutputFiles& files, const std::string& final_path, OIIO::Imag
     return {};
 }
 
-/// The positive preview of the negative `density`: through ADX and the
-/// OCIO config's display view (make_film_preview), or the plain inversion
-/// with a warning where the config cannot.
+/// The positive preview of the negative `density`: a timed print through
+/// ADX and the OCIO config's display view (make_film_preview), or the plain
+/// inversion with a warning where the config cannot. `cache`: the run's
+/// printing density transform (built by the first frame).
 Status write_preview(OutputFiles& files, const OIIO::ImageBuf& density,
                      const FilmgrainOptions& opts, const std::string& colorconfig,
-                     const Console& con, const std::string& final_path)
+                     const Console& con, const std::string& final_path,
+                     const std::shared_ptr<std::optional<AdxTransform>>& cache)
 {
     const OIIO::ImageSpec& ds = density.spec();
     Preview p;
     std::string warning;
     if (Status s = make_film_preview(static_cast<const float*>(density.localpixels()), ds.width,
-                                     ds.height, opts.stock, opts.scene, colorconfig, p, warning);
+                                     ds.height, opts.stock, opts.scene, colorconfig, p, warning,
+                                     cache);
         !s)
         return Status::errorf("preview: ", s.message());
     if (!warning.empty())
@@ -558,6 +561,12 @@ struct RenderContext {
     /// output=regrain's expected curves, built by the first frame.
     std::shared_ptr<std::vector<ExpectedCurve>> regrain_curves
         = std::make_shared<std::vector<ExpectedCurve>>();
+    /// output=adx10|adx16's and the preview's printing density transforms
+    /// (MODEL.md 11), built by the first frame.
+    std::shared_ptr<std::optional<AdxTransform>> adx_transform
+        = std::make_shared<std::optional<AdxTransform>>();
+    std::shared_ptr<std::optional<AdxTransform>> preview_transform
+        = std::make_shared<std::optional<AdxTransform>>();
 };
 
 /// Identifies what an output was made from, for --skip-existing: a SHA-1
@@ -597,6 +606,15 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                                 : Json(nullptr);
     j["output"]   = { { "kind", output_kind_name(cmd.output) },
                       { "ocolorspace", a.has_ocolorspace ? a.ocolorspace : "" } };
+    // ADX and the preview are printing densities with ADX's gains since
+    // MODEL.md 11 (issue 40): files written before (Status M, no gains,
+    // untimed previews) are not up to date. Density and regrain outputs
+    // without a preview keep their hashes.
+    if (cmd.output == OutputKind::adx10 || cmd.output == OutputKind::adx16)
+        j["output"]["adx"] = { { "encoding", "apd, k (1, 0.92, 0.95)" },
+                               { "timing", adx_timing_name(cmd.timing) } };
+    if (!job.preview.empty())
+        j["preview"] = "adx16 timed on grey";
     j["type"]     = a.output_type == OutputType::half16 ? "half" : "float";
     j["compression"] = a.output_modifiers.compression;
     const char* ocio_env = std::getenv("OCIO");
@@ -781,7 +799,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     OIIO::ImageBuf& result = cmd.output == OutputKind::density ? dst : transformed;
     OutputReport output_report;
     if (Status s = apply_output(
-            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves }, opts,
+            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves,
+                            cmd.timing, ctx.adx_transform },
+            opts,
             src, dst, result, output_report);
         !s)
         return s;
@@ -797,7 +817,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     if (Status s = write_image(files, job.output, result, type, "openexr"); !s)
         return s;
     if (!job.preview.empty())
-        if (Status s = write_preview(files, dst, opts, a.colorconfig, con, job.preview); !s)
+        if (Status s = write_preview(files, dst, opts, a.colorconfig, con, job.preview,
+                                     ctx.preview_transform);
+            !s)
             return s;
     report.seconds.write = seconds_since(t);
     report.seconds.total = seconds_since(t_start);

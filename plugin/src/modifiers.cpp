@@ -386,6 +386,15 @@ bool parse_output_value(std::string_view v, FilmgrainCommand& cmd, std::string& 
     return true;
 }
 
+bool parse_timing_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (!parse_adx_timing(v, cmd.timing)) {
+        why = "unknown timing (known: off, grey)";
+        return false;
+    }
+    return true;
+}
+
 std::string engine_choice(const char* what) { return std::string("the engine's choice (") + what + ")"; }
 
 /// RenderSettings::tile_size_px's documented range.
@@ -529,6 +538,13 @@ const Modifier kModifiers[] = {
       "plus the film's grain, in --ocolorspace (see Output below)",
       [](const FilmgrainCommand& d) { return std::string(output_kind_name(d.output)); },
       parse_output_value },
+    { "timing", "off|grey",
+      "ADX's printer lights (output=adx10|adx16 only): off = the standard encoding, the "
+      "stock's printing densities above D-min; grey = per-channel offsets that put the stock's "
+      "own 18% grey card on CDD 0.70 (ADX16 7120, ACES 0.18) in every channel, as a lab times "
+      "a negative (see Output below)",
+      [](const FilmgrainCommand& d) { return std::string(adx_timing_name(d.timing)); },
+      parse_timing_value },
 };
 
 std::string modifier_list()

@@ -171,7 +171,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
                            "static",   "edge",     "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
                            "photons",  "coverage", "grains",  "scale",    "samples",
-                           "tile",     "output" };
+                           "tile",     "output",   "timing" };
     ASSERT_EQ(docs.size(), std::size(keys));
     for (size_t i = 0; i < docs.size(); ++i) {
         EXPECT_EQ(docs[i].key, keys[i]);
@@ -271,6 +271,23 @@ TEST(Modifiers, OutputKind)
     for (const ModifierDoc& d : filmgrain_modifier_docs())
         documented |= d.key == "output" && d.default_text == "density"
                       && d.form == "density|adx10|adx16|regrain";
+    EXPECT_TRUE(documented);
+}
+
+TEST(Modifiers, AdxTiming)
+{
+    EXPECT_EQ(FilmgrainCommand().timing, AdxTiming::off);
+    EXPECT_EQ(parse_ok("--filmgrain:output=adx16:timing=grey").timing, AdxTiming::grey);
+    EXPECT_EQ(parse_ok("--filmgrain:output=adx10:timing=off").timing, AdxTiming::off);
+    for (const char* bad : { "gray", "Grey", "on", "1" }) {
+        const std::string e = parse_error(std::string("--filmgrain:timing=") + bad);
+        EXPECT_NE(e.find(std::string("timing=") + bad + ": unknown timing (known: off, grey)"),
+                  std::string::npos)
+            << e;
+    }
+    bool documented = false;
+    for (const ModifierDoc& d : filmgrain_modifier_docs())
+        documented |= d.key == "timing" && d.default_text == "off" && d.form == "off|grey";
     EXPECT_TRUE(documented);
 }
 

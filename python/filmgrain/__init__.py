@@ -210,6 +210,7 @@ def render(
     tolerance=None,
     tile=None,
     output=None,
+    timing=None,
     ocolorspace=None,
     colorconfig=None,
     threads=0,
@@ -266,7 +267,12 @@ def render(
             config's scene_linear whose local mean is the input and whose
             fluctuation is the film's grain; needs the scan at the input's
             size). The transforms' warnings (e.g. clamped ADX code values)
-            are Python UserWarnings.
+            are Python UserWarnings. ADX is the stock's Academy Printing
+            Density above D-min with ADX's gains (MODEL.md 11).
+        timing: output="adx10" / "adx16" only (as the CLI's ``timing=``):
+            "off" (the default: the standard encoding) or "grey" (printer
+            lights that put the stock's own 18% grey on CDD 0.70, ACES
+            0.18, in every channel).
         ocolorspace: output="regrain" only (as the CLI's --ocolorspace):
             the colour space of the positive, a name the colour config
             knows. Default: its scene_linear.
@@ -316,6 +322,7 @@ def render(
         tolerance=tolerance,
         tile=tile,
         output=output,
+        timing=timing,
     )
     modifiers.update(expert)
     return _render(pixels, stock, modifiers, threads, progress, None,

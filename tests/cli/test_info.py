@@ -7,7 +7,7 @@ from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
 MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "edge", "width_mm", "scan", "roi",
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
-             "tile", "output"]
+             "tile", "output", "timing"]
 
 OPTIONS = ["--wedge", "--chart", "--subimage", "--view", "--ch", "--colorconfig", "--iscolorspace",
            "--ocolorspace", "--filmgrain", "-d", "-o",
