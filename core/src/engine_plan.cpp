@@ -352,7 +352,16 @@ InputRegion read_region(const Stock& stock, const SceneSettings& scene, const Im
         whole_frame = whole_frame || layer.spreads_light();
     if (whole_frame)
         return InputRegion { 0, 0, input.frame_width(), input.frame_height() };
-    return input_region(input, frame, roi, 2.0 * max_radius_um(stock, scene));
+    InputRegion r = input_region(input, frame, roi, 2.0 * max_radius_um(stock, scene));
+    if (scene.edge == FrameEdge::clamp) {
+        // Beyond the image the nearest edge pixels are read: a region past
+        // an edge holds them (MODEL.md 2).
+        r.x0 = std::min(r.x0, input.frame_width() - 1);
+        r.y0 = std::min(r.y0, input.frame_height() - 1);
+        r.x1 = std::max(r.x1, r.x0 + 1);
+        r.y1 = std::max(r.y1, r.y0 + 1);
+    }
+    return r;
 }
 
 namespace {
@@ -441,7 +450,7 @@ LayerExposure direct_exposure(const PlanContext& c, size_t l)
 {
     const Layer& layer = c.stock.layers[l];
     return LayerExposure(c.input, layer.sensitivity, c.frame.input_pitch_um,
-                         saturation_value(layer, c.lxs_per_value));
+                         saturation_value(layer, c.lxs_per_value), c.scene.edge);
 }
 
 /// The spread exposure of every layer that spreads light (null for the
@@ -487,7 +496,7 @@ std::vector<LayerExposure> layer_exposures(const PlanContext& c, const SpreadLig
         exposures.push_back(spread.values[l]
                                 ? LayerExposure(spread_view(*spread.values[l], c.input),
                                                 { 1.0, 0.0, 0.0 }, c.frame.input_pitch_um,
-                                                direct_exposure(c, l).max_value())
+                                                direct_exposure(c, l).max_value(), c.scene.edge)
                                 : direct_exposure(c, l));
     return exposures;
 }

@@ -106,8 +106,10 @@ InputRegion input_region(const ImageView& input, const FrameGeometry& frame, con
 /// integrates its exposure over its disc), or the whole frame when a layer
 /// spreads light or inhibition acts (MODEL.md 9, 10: the spread exposure
 /// and the blurred densities are computed over the whole frame, so that a
-/// ROI reads exactly the values a full render does). The planner's choices
-/// that look at the pixels (whether light reaches a layer) look at these.
+/// ROI reads exactly the values a full render does). With the scene
+/// continued beyond the image (scene.edge clamp) it holds at least the
+/// image pixels nearest the ROI. The planner's choices that look at the
+/// pixels (whether light reaches a layer) look at these.
 InputRegion read_region(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                         const FrameGeometry& frame, const Roi& roi);
 

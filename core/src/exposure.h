@@ -2,12 +2,14 @@
 // to absorbed photons, with the image box-reconstructed over input pixels.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "filmgrain/image.h"
+#include "filmgrain/render.h"
 #include "filmgrain/stock.h"
 
 namespace filmgrain {
@@ -50,11 +52,12 @@ double disc_rect_area_um2(double cx_um, double cy_um, double r_um, double x0_um,
 /// negative v is 0 (there is no negative light); v above `max_value`
 /// (saturation_value), +Inf included, is max_value: the light saturates.
 /// Outside the image v = 0. Thread safety: const, shareable; holds a view,
-/// not a copy.
+/// not a copy. Beyond the image (MODEL.md 2): `edge` clamp, the nearest
+/// edge pixel's v (the scene continues); gate, 0.
 class LayerExposure {
 public:
     LayerExposure(const ImageView& input, const std::array<double, 3>& sensitivity,
-                  double input_pitch_um, double max_value);
+                  double input_pitch_um, double max_value, FrameEdge edge);
 
     /// v of input pixel (ix, iy) (whole-image coordinates), which must lie
     /// inside the view's window.
@@ -73,18 +76,33 @@ public:
     double max_value() const { return m_max_value; }
 
     /// Integral of v over the disc, value x square micrometres, against the
-    /// box-reconstructed image (exact up to rounding).
+    /// box-reconstructed image and what lies beyond it (exact up to
+    /// rounding).
     double integrate_over_disc(double cx_um, double cy_um, double r_um) const;
 
-    /// v at the input pixel containing a point (0 outside the image).
+    /// v at the input pixel containing a point (beyond the image: the
+    /// edge's, or 0).
     double value_at(double x_um, double y_um) const;
 
     /// Mean of v over the rectangle [x0, x1] x [y0, y1] (box-reconstructed
-    /// image, 0 outside it): the input pixels it overlaps, weighted by the
-    /// overlap.
+    /// image, and beyond it the edge's or 0): the input pixels it overlaps,
+    /// weighted by the overlap.
     double mean_over_rect(double x0_um, double y0_um, double x1_um, double y1_um) const;
 
+    /// What lies beyond the image.
+    FrameEdge edge() const { return m_edge; }
+    /// The image pixel whose v a pixel index (any, beyond the image too)
+    /// reads with edge() == clamp: the nearest one.
+    int64_t clamp_x(int64_t ix) const { return std::clamp<int64_t>(ix, 0, m_input.frame_width() - 1); }
+    int64_t clamp_y(int64_t iy) const { return std::clamp<int64_t>(iy, 0, m_input.frame_height() - 1); }
+
 private:
+    /// integrate_over_disc of a disc inside the image's pixels [ix0, ix1] x
+    /// [iy0, iy1], and of one reaching beyond the image (clamp).
+    double integrate_over_pixels(double cx_um, double cy_um, double r_um, int64_t ix0,
+                                 int64_t iy0, int64_t ix1, int64_t iy1) const;
+    double integrate_over_disc_beyond(double cx_um, double cy_um, double r_um) const;
+
     /// dot(sensitivity, rgb) of a pixel, unclamped: NaN where a channel is
     /// NaN, channels of weight 0 left out (0 x Inf is not NaN here).
     double weighted_sum(int64_t ix, int64_t iy) const
@@ -107,6 +125,7 @@ private:
     double m_grey_weight;
     double m_pitch_um;
     double m_max_value;
+    FrameEdge m_edge;
 };
 
 }  // namespace filmgrain

@@ -55,7 +55,7 @@ TEST(LayerExposure, IntegratesAgainstTheBoxImage)
         for (int x = 0; x < 4; ++x)
             px[y * 4 + x] = static_cast<float>(x + 1);
     const ImageView view { px.data(), 4, 3, 1 };
-    const LayerExposure ex(view, { 1.0, 0.0, 0.0 }, 10.0, 1e30);
+    const LayerExposure ex(view, { 1.0, 0.0, 0.0 }, 10.0, 1e30, FrameEdge::gate);
     // Inside one pixel: value * pi r^2.
     EXPECT_NEAR(ex.integrate_over_disc(15, 15, 2), 2 * M_PI * 4, 1e-12);
     // Straddling columns 1 and 2 at x = 20: half the disc each.
@@ -79,7 +79,7 @@ TEST(LayerExposure, SpecialValuesExposeNothingOrSaturate)
     std::vector<float> rgb = { nan, 1,   1, inf, 1, 1, -2,   1, 1, 0.5f, 0.25f, 1,
                                -inf, 1, 1, 0,   0, inf, 3e6f, 0, 0, inf, -inf, 0 };
     const ImageView view { rgb.data(), 8, 1, 3 };
-    const LayerExposure ex(view, { 1.0, 1.0, 0.0 }, 1.0, 1e6);
+    const LayerExposure ex(view, { 1.0, 1.0, 0.0 }, 1.0, 1e6, FrameEdge::gate);
     EXPECT_EQ(ex.value(0, 0), 0.0);   // NaN channel
     EXPECT_EQ(ex.value(1, 0), 1e6);   // +Inf: saturates
     EXPECT_TRUE(ex.saturates(1, 0));
@@ -93,7 +93,8 @@ TEST(LayerExposure, SpecialValuesExposeNothingOrSaturate)
     EXPECT_EQ(ex.value(7, 0), 0.0);   // +Inf - Inf: no defined light
     // Grey input is read as (y, y, y).
     std::vector<float> grey = { 0.5f, inf };
-    const LayerExposure eg(ImageView { grey.data(), 2, 1, 1 }, { 0.2, 0.3, 0.4 }, 1.0, 1e6);
+    const LayerExposure eg(ImageView { grey.data(), 2, 1, 1 }, { 0.2, 0.3, 0.4 }, 1.0, 1e6,
+                           FrameEdge::gate);
     EXPECT_NEAR(eg.value(0, 0), 0.45, 1e-7);
     EXPECT_EQ(eg.value(1, 0), 1e6);
 }

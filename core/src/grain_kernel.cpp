@@ -70,8 +70,13 @@ void ExposurePlane::fill(const LayerExposure& exposure, const FrameGeometry& fra
                          const RectUm& rect)
 {
     const double p = frame.input_pitch_um;
-    const auto clip = [](double v, int64_t n) {
-        return std::clamp<int64_t>(static_cast<int64_t>(std::clamp(v, -1.0, 9e18)), 0, n);
+    // The pixels under `rect`: within the image (gate: zeros beyond), or
+    // all of them, beyond the image the nearest edge pixel's (clamp,
+    // MODEL.md 2).
+    const bool clamp = exposure.edge() == FrameEdge::clamp;
+    const auto clip = [clamp](double v, int64_t n) {
+        const int64_t i = static_cast<int64_t>(std::clamp(v, -9e18, 9e18));
+        return clamp ? i : std::clamp<int64_t>(i, 0, n);
     };
     const int64_t x0 = clip(std::floor(rect.x0_um / p), frame.input_width);
     const int64_t y0 = clip(std::floor(rect.y0_um / p), frame.input_height);
@@ -89,8 +94,13 @@ void ExposurePlane::fill(const LayerExposure& exposure, const FrameGeometry& fra
     m_padded.assign(m_padded_stride * static_cast<size_t>(m_ny + 2 * kPad), 0.0f);
     for (int64_t y = y0; y < y1; ++y) {
         float* row = m_padded.data() + static_cast<size_t>(y - y0 + kPad) * m_padded_stride + kPad;
-        for (int64_t x = x0; x < x1; ++x)
-            row[x - x0] = static_cast<float>(exposure.value(x, y));
+        if (clamp)
+            for (int64_t x = x0; x < x1; ++x)
+                row[x - x0] = static_cast<float>(exposure.value(exposure.clamp_x(x),
+                                                                exposure.clamp_y(y)));
+        else
+            for (int64_t x = x0; x < x1; ++x)
+                row[x - x0] = static_cast<float>(exposure.value(x, y));
     }
 }
 

@@ -165,9 +165,10 @@ private:
 };
 
 /// The exposure values v of one layer (LayerExposure) over the input pixels
-/// under a film rectangle, as floats, 0 outside the image: the centre
-/// lookup of the fast kernel costs one load, its disc integral four.
-/// Reused from tile to tile.
+/// under a film rectangle, as floats; beyond the image the nearest edge
+/// pixel's (the exposure's edge clamp) or 0 (gate), as LayerExposure reads
+/// them: the centre lookup of the fast kernel costs one load, its disc
+/// integral four. Reused from tile to tile.
 class ExposurePlane {
 public:
     /// Fills the plane for the input pixels that `rect` touches.

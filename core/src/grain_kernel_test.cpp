@@ -136,7 +136,7 @@ TEST(ExposurePlane, DiscIntegralIsTheBoxImagesIntegral)
     for (float& v : px)
         v = unit(gen) < 0.2 ? 0.0f : static_cast<float>(4.0 * unit(gen));
     const ImageView view { px.data(), W, H, 1 };
-    const LayerExposure exposure(view, { 1.0, 0.0, 0.0 }, kPitch, 1e30);
+    const LayerExposure exposure(view, { 1.0, 0.0, 0.0 }, kPitch, 1e30, FrameEdge::gate);
     FrameGeometry frame;
     ASSERT_TRUE(FrameGeometry::make(W * kPitch / 1000.0, W, H, W, H, frame));
     ExposurePlane plane;
@@ -189,7 +189,7 @@ TEST(ExposurePlane, EveryBuildGivesTheSameDiscIntegrals)
     for (float& v : px)
         v = static_cast<float>(3.0 * unit(gen));
     const ImageView view { px.data(), W, H, 1 };
-    const LayerExposure exposure(view, { 1.0, 0.0, 0.0 }, 6.0, 1e30);
+    const LayerExposure exposure(view, { 1.0, 0.0, 0.0 }, 6.0, 1e30, FrameEdge::gate);
     FrameGeometry frame;
     ASSERT_TRUE(FrameGeometry::make(W * 6.0 / 1000.0, W, H, W, H, frame));
     ExposurePlane plane;

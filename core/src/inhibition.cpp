@@ -45,9 +45,10 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
     std::vector<std::vector<double>> blurred(nl);
     std::atomic<bool> stop { false };
     // Each donor's density above the fog, row by row on every thread. Beyond
-    // the frame the film is unexposed: its density is the fog's. The blur
-    // acts on the density above the fog (0 outside the frame, as
-    // spread_frame takes it), the fog added back after.
+    // the frame (gate) the film is unexposed: its density is the fog's. The
+    // blur acts on the density above the fog (0 outside the frame, as
+    // spread_frame takes it with gate; with clamp it continues the edge's),
+    // the fog added back after.
     std::vector<double> fog(nl, 0.0);
     for (size_t j = 0; j < nl; ++j) {
         if (!donor[j])
@@ -73,7 +74,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         std::vector<double>& d = blurred[j];
         if (stock.inhibitor_diffusion_um > 0.0)
             d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
-                             stock.inhibitor_diffusion_um, HalationSpec());
+                             stock.inhibitor_diffusion_um, HalationSpec(), scene.edge);
         for (double& v : d)
             v += fog[j];
     });
@@ -100,6 +101,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         plane->width    = frame_width;
         plane->height   = frame_height;
         plane->pitch_um = pitch_um;
+        plane->clamp_edge = scene.edge == FrameEdge::clamp;
         plane->values.resize(n);
         parallel_for(frame_height, nthreads, stop, [&](int, int64_t y) {
             for (size_t i = static_cast<size_t>(y * frame_width);

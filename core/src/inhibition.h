@@ -6,6 +6,7 @@
 #pragma once
 
 #include <atomic>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -30,18 +31,24 @@ inline double inhibited_uniform(double u, double log_factor)
 }
 
 /// A value per input pixel over the whole frame, read box-reconstructed
-/// (the pixel holding a point; 0 outside the frame).
+/// (the pixel holding a point; beyond the frame the nearest edge pixel's
+/// with `clamp_edge`, the scene continued (MODEL.md 2), else 0).
 struct FramePlane {
     std::vector<float> values;  ///< row by row
     int64_t width = 0, height = 0;
     double pitch_um = 1.0;
+    bool clamp_edge = false;
 
     double at(double x_um, double y_um) const
     {
-        const double fx = std::floor(x_um / pitch_um), fy = std::floor(y_um / pitch_um);
+        double fx = std::floor(x_um / pitch_um), fy = std::floor(y_um / pitch_um);
         if (!(fx >= 0.0 && fy >= 0.0 && fx < static_cast<double>(width)
-              && fy < static_cast<double>(height)))
-            return 0.0;
+              && fy < static_cast<double>(height))) {
+            if (!clamp_edge || std::isnan(fx) || std::isnan(fy))
+                return 0.0;
+            fx = std::clamp(fx, 0.0, static_cast<double>(width - 1));
+            fy = std::clamp(fy, 0.0, static_cast<double>(height - 1));
+        }
         return values[static_cast<size_t>(static_cast<int64_t>(fy) * width
                                           + static_cast<int64_t>(fx))];
     }
@@ -53,7 +60,9 @@ struct FramePlane {
 /// the base density) at each input pixel's exposure value, blurred by the
 /// normalised Gaussian of standard deviation inhibitor_diffusion_um
 /// (spread_frame: exact pixel means, over the whole frame; beyond the frame
-/// the film is unexposed and its density the fog's). `exposures[j]`
+/// the scene continues (MODEL.md 2, scene.edge clamp: each point the
+/// density of the nearest edge pixel), or (gate) the film is unexposed and
+/// its density the fog's). `exposures[j]`
 /// gives layer j's exposure value (after its light spread) over the whole
 /// frame. A layer whose row is all zero gets no plane (null).
 struct InhibitionPlan {

@@ -150,7 +150,8 @@ TEST(Inhibition, TheEdgeEffectsWidthIsTheDiffusions)
     // the curvature.
     for (double sigma : { 20.0, 60.0 }) {
         const TestScene s = edge_scene(1.0, sigma, 8);
-        const LayerExposure exposure(s.view, s.stock.layers[0].sensitivity, kPitchUm, 1e30);
+        const LayerExposure exposure(s.view, s.stock.layers[0].sensitivity, kPitchUm, 1e30,
+                                     FrameEdge::gate);
         InhibitionPlan plan;
         ASSERT_TRUE(plan_inhibition(s.stock, s.scene, { &exposure }, kWidth, 8, kPitchUm, 0, plan));
         ASSERT_TRUE(plan.log_factor[0]);

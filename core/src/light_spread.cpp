@@ -607,7 +607,7 @@ PixelKernel base_halation_pixel_kernel(const BaseHalation& base, double pitch_um
 
 std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
-                                 double scatter_sigma_um, const HalationSpec& halo)
+                                 double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge)
 {
     const int64_t w = frame_width, h = frame_height;
     const bool scattering = scatter > 0.0 && scatter_sigma_um > 0.0;
@@ -617,14 +617,18 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
     const double halation = halo.fraction;
     // The transform's size, checked before anything is built: a kernel far
     // wider than the frame's pixels (a tiny pitch) must not exhaust memory.
-    // The base kernel's offsets beyond the frame (plus the Gaussian's
-    // reach) meet no pair of the frame's pixels: they are left out.
+    // With nothing beyond the frame (gate), the base kernel's offsets
+    // beyond it (plus the Gaussian's reach) meet no pair of the frame's
+    // pixels: they are left out. With the scene continued (clamp) the
+    // margin's light comes from the whole reach.
+    const bool crop         = base && edge == FrameEdge::gate;
     const double scatter_px = scattering ? 6.0 * scatter_sigma_um / pitch_um + 2.0 : 0.0;
     double halo_px          = haloing ? halo.reach_um() / pitch_um + 2.0 : 0.0;
-    if (base)
+    if (crop)
         halo_px = std::min(halo_px, static_cast<double>(std::max(w, h)) + scatter_px);
-    const double reach_px = scatter_px + halo_px;
-    const double cells = (static_cast<double>(w) + reach_px) * (static_cast<double>(h) + reach_px);
+    const double reach_px  = scatter_px + halo_px;
+    const double margin_px = (edge == FrameEdge::clamp ? 2.0 : 1.0) * reach_px;
+    const double cells = (static_cast<double>(w) + margin_px) * (static_cast<double>(h) + margin_px);
     if (!(cells <= kMaxTransformCells))
         throw std::runtime_error(
             "light spread: the kernels reach " + std::to_string(reach_px) + " input pixels of "
@@ -641,18 +645,33 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
     if (base)
         k = base_halation_pixel_kernel(BaseHalation(halo.base_thickness_um,
                                                     halo.base_refractive_index, halo.rear_face),
-                                       pitch_um, std::max(w, h) - 1 + g.reach);
+                                       pitch_um,
+                                       crop ? std::max(w, h) - 1 + g.reach
+                                            : std::numeric_limits<int64_t>::max());
     else if (haloing)
         k = halation_pixel_kernel(halo.kernel, halo.radius_um, pitch_um);
     // A period of at least the frame plus the kernels' reach: the circular
-    // convolution then wraps only zeros into the frame.
+    // convolution then wraps only zeros into the frame (gate). With the
+    // scene continued beyond the frame (clamp, MODEL.md 2), the frame sits
+    // `pad` = reach pixels in, the margin holding the nearest edge pixel's
+    // value, and the period takes the margins on both sides: what the
+    // kernels read around the frame is the margin, never a wrap.
     const int64_t reach = g.reach + k.reach;
-    const int64_t nx = fft_size_at_least(w + reach), ny = fft_size_at_least(h + reach);
+    const int64_t pad   = edge == FrameEdge::clamp ? reach : 0;
+    const int64_t nx = fft_size_at_least(w + reach + pad), ny = fft_size_at_least(h + reach + pad);
 
     FftGrid v(nx, ny);
-    for (int64_t y = 0; y < h; ++y)
-        for (int64_t x = 0; x < w; ++x)
-            v.real(x, y) = values[static_cast<size_t>(y * w + x)];
+    if (pad == 0) {
+        for (int64_t y = 0; y < h; ++y)
+            for (int64_t x = 0; x < w; ++x)
+                v.real(x, y) = values[static_cast<size_t>(y * w + x)];
+    } else {
+        for (int64_t y = -pad; y < h + pad; ++y)
+            for (int64_t x = -pad; x < w + pad; ++x)
+                v.real(x + pad, y + pad)
+                    = values[static_cast<size_t>(std::clamp<int64_t>(y, 0, h - 1) * w
+                                                 + std::clamp<int64_t>(x, 0, w - 1))];
+    }
     v.transform(true);
 
     const int64_t kw = v.spectrum_width();
@@ -697,7 +716,7 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
     for (int64_t y = 0; y < h; ++y)
         for (int64_t x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y * w + x);
-            out[i]         = (1.0 - s) * values[i] + std::max(0.0, v.real(x, y));
+            out[i]         = (1.0 - s) * values[i] + std::max(0.0, v.real(x + pad, y + pad));
         }
     return out;
 }
@@ -712,7 +731,7 @@ std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
             values[static_cast<size_t>(y * frame_width + x)] = exposure.value(x, y);
     const std::vector<double> spread
         = spread_frame(values, frame_width, frame_height, pitch_um, layer.scatter,
-                       layer.scatter_sigma_um, layer_halation(stock, layer));
+                       layer.scatter_sigma_um, layer_halation(stock, layer), exposure.edge());
     std::vector<float> out(spread.size());
     for (size_t i = 0; i < spread.size(); ++i)
         out[i] = static_cast<float>(std::min<double>(spread[i], std::numeric_limits<float>::max()));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "exposure.h"
+#include "filmgrain/render.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
 
@@ -143,8 +144,9 @@ HalationSpec layer_halation(const Stock& stock, const Layer& layer);
 /// The exposure value of a layer after its scatter and halation
 /// (MODEL.md 9): H_s = (1 - scatter) H + scatter (G * H), then
 /// H' = H_s + halation (K * H_s), over the whole input frame
-/// (frame_width x frame_height pixels of `pitch_um`; 0 outside the frame).
-/// `exposure` gives the unspread value of every pixel and must view the
+/// (frame_width x frame_height pixels of `pitch_um`; beyond the frame the
+/// nearest edge pixel's value or 0, as `exposure`'s edge() says, MODEL.md
+/// 2). `exposure` gives the unspread value of every pixel and must view the
 /// whole frame. The result, row by row, is the exact mean of H' over each
 /// input pixel to rounding (the kernels' pixel weights above, an FFT
 /// convolution in double precision whose round-off is clamped at 0), stored
@@ -160,16 +162,18 @@ std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
                                    const LayerExposure& exposure, int64_t frame_width,
                                    int64_t frame_height, double pitch_um);
 
-/// The convolution itself, on any frame of values (w x h, row by row, 0
-/// outside): (1 - scatter) V + scatter (G * V), then + halation (K * that),
-/// with the pixel kernels above. spread_exposure applies it to a layer's
+/// The convolution itself, on any frame of values (w x h, row by row;
+/// beyond the frame the nearest edge value (`edge` clamp) or 0 (gate)):
+/// (1 - scatter) V + scatter (G * V), then + halation (K * that), with the
+/// pixel kernels above. spread_exposure applies it to a layer's
 /// exposure; MODEL.md 10 blurs expected densities with it (scatter 1, no
 /// halation: the Gaussian alone). Deterministic as spread_exposure. Throws
 /// std::runtime_error (naming the keys to lower) when the frame plus the
 /// kernels' reach would need a transform of more than 2^28 values.
 std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
-                                 double scatter_sigma_um, const HalationSpec& halation);
+                                 double scatter_sigma_um, const HalationSpec& halation,
+                                 FrameEdge edge);
 
 /// A transform length >= n with no prime factor above 7 (FFTW is fast on
 /// those).

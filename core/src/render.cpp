@@ -240,7 +240,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
             std::vector<LayerExposure> direct;
             for (size_t l = 0; l < stock.layers.size(); ++l)
                 direct.emplace_back(input, stock.layers[l].sensitivity, frame.input_pitch_um,
-                                    plan[l].exposure.max_value());
+                                    plan[l].exposure.max_value(), scene.edge);
             stats->input = scan_input(input, need, direct);
             stats->simulate_seconds
                 = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

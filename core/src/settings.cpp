@@ -107,6 +107,17 @@ bool parse_engine(const std::string& name, Engine& out)
     return parse_by_name(name, all, engine_name, out);
 }
 
+const char* frame_edge_name(FrameEdge edge)
+{
+    return edge == FrameEdge::gate ? "gate" : "clamp";
+}
+
+bool parse_frame_edge(const std::string& name, FrameEdge& out)
+{
+    constexpr FrameEdge all[] = { FrameEdge::clamp, FrameEdge::gate };
+    return parse_by_name(name, all, frame_edge_name, out);
+}
+
 bool parse_kinetics_method(const std::string& name, KineticsMethod& out)
 {
     constexpr KineticsMethod all[] = { KineticsMethod::chain, KineticsMethod::early_stop,

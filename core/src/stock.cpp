@@ -275,6 +275,99 @@ Status parse_layer(const Json& j, const std::string& path, Layer& out)
     return {};
 }
 
+// --- MODEL.md 11: printing_density (Status M -> APD) ----------------------
+
+/// Largest magnitude of an entry of the Status M -> APD map: S-2008-002
+/// Annex C's maps are near the identity (diagonal 0.96-1.10, the rest
+/// within 0.03, offsets within 0.05).
+constexpr double kMaxApdMapEntry = 10.0;
+
+/// Reads `n` numbers of the array `j` (at `path`) into `out`.
+Status read_number_array(const Json& j, const std::string& path, size_t n, double* out)
+{
+    if (!j.is_array() || j.size() != n)
+        return Status::errorf(path, " must be an array of ", n, " numbers, not ", j.dump());
+    for (size_t i = 0; i < n; ++i) {
+        if (!j[i].is_number())
+            return Status::errorf(path, "[", i, "] must be a number, not ", type_name(j[i]),
+                                  " (", j[i].dump(), ")");
+        out[i] = j[i].get<double>();
+    }
+    return {};
+}
+
+/// `printing_density: { status_m_to_apd: { matrix: [[3x3]], offset: [3] } }`,
+/// the datasheets' form (stocks/datasheets/README.md); every key required.
+Status parse_printing_density(const Json& j, Stock& out)
+{
+    const std::string top = "printing_density";
+    if (Status s = expect_object(j, top); !s)
+        return s;
+    for (auto it = j.begin(); it != j.end(); ++it)
+        if (it.key() != "status_m_to_apd")
+            return Status::errorf("unknown key '", top, ".", it.key(),
+                                  "'; allowed keys here: status_m_to_apd");
+    const auto map = j.find("status_m_to_apd");
+    if (map == j.end())
+        return Status::errorf(top, " needs status_m_to_apd (the Status M -> APD map)");
+    const std::string path = top + ".status_m_to_apd";
+    if (Status s = expect_object(*map, path); !s)
+        return s;
+    for (auto it = map->begin(); it != map->end(); ++it)
+        if (it.key() != "matrix" && it.key() != "offset")
+            return Status::errorf("unknown key '", path, ".", it.key(),
+                                  "'; allowed keys here: matrix, offset");
+    StatusMToApd m;
+    for (const char* key : { "matrix", "offset" })
+        if (!map->contains(key))
+            return Status::errorf(path, " needs ", key,
+                                  " (APD = matrix * Status M + offset, S-2008-002 Annex C)");
+    const Json& matrix = (*map)["matrix"];
+    if (!matrix.is_array() || matrix.size() != 3)
+        return Status::errorf(path, ".matrix must be 3 rows of 3 numbers, not ", matrix.dump());
+    for (size_t r = 0; r < 3; ++r)
+        if (Status s = read_number_array(matrix[r], path + ".matrix[" + std::to_string(r) + "]",
+                                         3, m.matrix[r].data());
+            !s)
+            return s;
+    if (Status s = read_number_array((*map)["offset"], path + ".offset", 3, m.offset.data()); !s)
+        return s;
+    out.status_m_to_apd = m;
+    return {};
+}
+
+Status validate_printing_density(const Stock& stock)
+{
+    if (!stock.status_m_to_apd)
+        return {};
+    const std::string path = "printing_density.status_m_to_apd.";
+    const StatusMToApd& m  = *stock.status_m_to_apd;
+    const auto check = [&](double v, const std::string& where) {
+        if (std::isfinite(v) && std::fabs(v) <= kMaxApdMapEntry)
+            return Status();
+        return Status::errorf(path, where, " = ", format_number(v), ": must be in [",
+                              format_number(-kMaxApdMapEntry), ", ",
+                              format_number(kMaxApdMapEntry), "]");
+    };
+    for (size_t r = 0; r < 3; ++r) {
+        for (size_t c = 0; c < 3; ++c)
+            if (Status s = check(m.matrix[r][c], "matrix[" + std::to_string(r) + "]["
+                                                     + std::to_string(c) + "]");
+                !s)
+                return s;
+        if (Status s = check(m.offset[r], "offset[" + std::to_string(r) + "]"); !s)
+            return s;
+    }
+    for (const char* name : { "R", "G", "B" }) {
+        const bool found = std::any_of(stock.layers.begin(), stock.layers.end(),
+                                       [&](const Layer& l) { return l.name == name; });
+        if (!found)
+            return Status::errorf("printing_density maps the densities of the layers named R, "
+                                  "G and B; the stock has no layer ", name);
+    }
+    return {};
+}
+
 }  // namespace
 
 const char* halation_kernel_name(HalationKernel kernel)
@@ -385,7 +478,7 @@ Status Stock::validate() const
             }
         }
     }
-    return {};
+    return validate_printing_density(*this);
 }
 
 bool Stock::inhibits() const
@@ -413,7 +506,7 @@ Status parse_stock_json(const std::string& text, const std::string& origin, Stoc
 
     Stock stock;
     const std::set<std::string> other_keys = { "name", "description", "layers", "inhibition",
-                                               "rear_face" };
+                                               "rear_face", "printing_density" };
     Status s = read_numbers(j, kStockFields, other_keys, "", stock);
     if (s)
         s = read_string(j, "name", "", stock.name);
@@ -463,6 +556,11 @@ Status parse_stock_json(const std::string& text, const std::string& origin, Stoc
             }
         }
     }
+    if (s) {
+        auto it = j.find("printing_density");
+        if (it != j.end())
+            s = parse_printing_density(*it, stock);
+    }
     if (s)
         s = stock.validate();
     if (!s)
@@ -507,6 +605,9 @@ std::string stock_to_json(const Stock& stock, int indent)
         }
         j["layers"].push_back(jl);
     }
+    if (stock.status_m_to_apd)  // absent: APD = Status M (MODEL.md 11)
+        j["printing_density"]["status_m_to_apd"] = { { "matrix", stock.status_m_to_apd->matrix },
+                                                     { "offset", stock.status_m_to_apd->offset } };
     return j.dump(indent);
 }
 

@@ -137,6 +137,34 @@ const std::vector<OptionSpec>& option_table()
                   s = Status::error("--iscolorspace: empty colour space name");
               return s;
           } },
+        { "--subimage", nullptr, "N|NAME",
+          "Part of a multi-part INPUT to read, by index (from 0) or name (as oiiotool's "
+          "--subimage; default: the first part with the channels)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s = once(!a.input_selection.subimage.empty(), "--subimage");
+              a.input_selection.subimage = v;
+              if (s && a.input_selection.subimage.empty())
+                  s = Status::error("--subimage: empty part name");
+              return s;
+          } },
+        { "--view", nullptr, "NAME",
+          "View of a multi-view INPUT to read (default: the file's default view, the first it "
+          "lists)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              Status s               = once(!a.input_selection.view.empty(), "--view");
+              a.input_selection.view = v;
+              if (s && a.input_selection.view.empty())
+                  s = Status::error("--view: empty view name");
+              return s;
+          } },
+        { "--ch", nullptr, "R,G,B|Y",
+          "Channels of INPUT to read as red, green and blue, or one as grey, by name (as "
+          "oiiotool's --ch; default: R, G, B, else Y, of the view)",
+          [](CliArgs& a, const std::string&, const char* v) {
+              if (Status s = once(!a.input_selection.channels.empty(), "--ch"); !s)
+                  return s;
+              return parse_channel_list(v, a.input_selection.channels);
+          } },
         { "--ocolorspace", nullptr, "NAME",
           "Colour space of the output=regrain positive (default: the config's scene_linear); "
           "only with output=regrain",
@@ -171,7 +199,8 @@ const std::vector<OptionSpec>& option_table()
           } },
         { "-o", nullptr, "FILE.exr",
           "Output OpenEXR file (required to render; written atomically: created unnamed in "
-          "its directory and linked into place when complete). Modifier :compression=NAME",
+          "its directory and linked into place when complete). Modifiers go on the option, "
+          "as oiiotool's: -o:compression=NAME FILE.exr",
           [](CliArgs& a, const std::string& flag, const char* v) {
               if (Status s = once(!a.output.empty(), "-o"); !s)
                   return s;
@@ -210,8 +239,9 @@ const std::vector<OptionSpec>& option_table()
           } },
         { "--dry-run", nullptr, "",
           "Render nothing: print on stdout, one JSON object per line, each image the command "
-          "would render (frame, input, output, stats, preview, input_exists, settings_hash, "
-          "up_to_date as --skip-existing judges it) and exit. For scripts and farms",
+          "would render (frame, input, output, stats, preview, input_exists, error: what the "
+          "render would refuse from the input's header, else null; settings_hash, up_to_date "
+          "as --skip-existing judges it) and exit. For scripts and farms",
           [](CliArgs& a, const std::string&, const char*) {
               a.dry_run = true;
               return Status();
@@ -417,6 +447,12 @@ Status validate_render_args(const CliArgs& a)
         return Status::error("--iscolorspace applies to INPUT; the --wedge is scene-linear");
     if (a.chart && a.has_iscolorspace)
         return Status::error("--iscolorspace applies to INPUT; the --chart is scene-linear");
+    const InputSelection& sel = a.input_selection;
+    if ((a.wedge || a.chart)
+        && (!sel.subimage.empty() || !sel.view.empty() || !sel.channels.empty()))
+        return Status::errorf("--subimage, --view and --ch choose what to read of INPUT; the ",
+                              a.wedge ? "--wedge" : "--chart", " has one part, one view and ",
+                              "its own channels");
     if (!a.has_filmgrain)
         return Status::error("no --filmgrain command given: nothing to do (--filmgrain alone "
                              "renders with the defaults)");
@@ -424,8 +460,20 @@ Status validate_render_args(const CliArgs& a)
         return Status::errorf("--ocolorspace ", a.ocolorspace, " applies to output=regrain only "
                               "(the output is ", output_kind_name(a.filmgrain.output),
                               ": densities and ADX code values have no colour space to choose)");
+    if (a.filmgrain.timing != AdxTiming::off && a.filmgrain.output != OutputKind::adx10
+        && a.filmgrain.output != OutputKind::adx16)
+        return Status::errorf("timing=", adx_timing_name(a.filmgrain.timing),
+                              " applies to output=adx10 and adx16 only (the output is ",
+                              output_kind_name(a.filmgrain.output),
+                              "; --preview is always timed on grey)");
     if (a.output.empty())
         return Status::error("no output given: -o FILE.exr is required");
+    // oiiotool's modifiers go on the option: -o:compression=zip out.exr.
+    const size_t colon = a.output.find(':');
+    if (colon != std::string::npos && lowercase_extension(a.output.substr(0, colon)) == ".exr")
+        return Status::errorf("-o ", a.output, ": modifiers go on the option, before the file "
+                              "name: -o", a.output.substr(colon), " ",
+                              a.output.substr(0, colon));
     if (lowercase_extension(a.output) != ".exr")
         return Status::errorf("output '", a.output,
                               "' must be an OpenEXR file (.exr): it holds density data, "
@@ -456,9 +504,10 @@ std::string help_text()
     std::ostringstream out;
     out << "filmgrain " << version_string()
         << " -- physically based per-grain film simulation\n\n"
-        << "Usage: filmgrain INPUT [--colorconfig FILE] [--iscolorspace NAME]\n"
+        << "Usage: filmgrain INPUT [--subimage N|NAME] [--view NAME] [--ch R,G,B|Y]\n"
+        << "                 [--colorconfig FILE] [--iscolorspace NAME]\n"
         << "                 --filmgrain[:key=value...] [--ocolorspace NAME]\n"
-        << "                 [-d half|float] -o OUTPUT.exr\n"
+        << "                 [-d half|float] -o[:compression=NAME] OUTPUT.exr\n"
         << "                 [--stats FILE.json] [--preview FILE.png] [--threads N]\n"
         << "                 [--progress] [-q]\n"
         << "       filmgrain PLATE.####.exr --frames LIST --filmgrain[:...] -o NEG.####.exr\n"
@@ -551,19 +600,26 @@ std::string help_text()
                    "filmgrain:version. Overscan (a data window beyond the display window) is "
                    "rendered too, at negative coordinates and beyond the scan.");
     append_wrapped(out, "    ",
-                   "adx10, adx16: Academy Density Exchange (SMPTE ST 2065-3), channels R, G, B: "
-                   "code value = 95 + 500 D (adx10) or 1520 + 8000 D (adx16), rounded, clamped "
-                   "to [0, 1023] or [0, 65535] (clamped values are counted in a warning) and "
-                   "stored divided by 1023 or 65535, as OCIO's ADX10 / ADX16 colour spaces (ACES "
-                   "configs, and the embedded one) read them to bring the scan to ACES2065-1. D "
-                   "is the density above D-min: the layer's density minus its expected density "
-                   "at zero exposure (base + fog, from the model). R, G, B are the layers named "
-                   "R, G and B (the colour-negative preset's red-, green- and blue-sensitive "
-                   "layers: the dye a red-sensitive layer forms absorbs red, so its density "
-                   "stands for the red printing density; filmgrain's layers are silver, so this "
-                   "is an approximation). A one-layer stock gives R = G = B (silver is neutral); "
-                   "other stocks are refused. filmgrain:colorspace (and oiio:ColorSpace in "
-                   "memory) is ADX10 or ADX16.");
+                   "adx10, adx16: Academy Density Exchange (SMPTE ST 2065-3; MODEL.md 11), "
+                   "channels R, G, B: code value = 95 + 500 CDD (adx10) or 1520 + 8000 CDD "
+                   "(adx16), rounded, clamped to [0, 1023] or [0, 65535] (clamped values are "
+                   "counted in a warning) and stored divided by 1023 or 65535, as OCIO's ADX10 / "
+                   "ADX16 colour spaces (ACES configs, and the embedded one) read them to bring "
+                   "the scan to ACES2065-1. CDD = k (APD - APD D-min), k = (1, 0.92, 0.95) "
+                   "(S-2008-002 eq. 1): APD, the Academy Printing Density, is the stock's map "
+                   "of its Status M layer densities (its key printing_density: APD = M StM + "
+                   "o, S-2008-002 Annex C, published per stock; vision3-500t, no-remjet: "
+                   "5219's, vision3-250d: 5207's); a stock without one reads APD = Status M. "
+                   "D-min is each layer's expected density at zero exposure (base + fog, from "
+                   "the model). R, G, B are the layers named R, G and B; a one-layer stock "
+                   "gives R = G = B (its gains still apply, as an ADX scanner's would). "
+                   "timing=grey adds per-channel printer lights that put the stock's own 18% "
+                   "grey card (its expected densities at exposure offset 0) on CDD 0.70 "
+                   "(ADX16 7120, ACES 0.18). Metadata: filmgrain:colorspace (and "
+                   "oiio:ColorSpace in memory) ADX10 or ADX16, filmgrain:printing_density "
+                   "(annex_c, or status_m (no map)), filmgrain:adx_dmin (Status M), "
+                   "filmgrain:apd_dmin, filmgrain:adx_gains, filmgrain:adx_timing (off, or "
+                   "the CDD added per channel).");
     append_wrapped(out, "    ",
                    "regrain: a scene-linear positive whose local mean is the input and whose "
                    "fluctuation is the film's grain, for comp to add to a clean element. Each "
@@ -580,13 +636,17 @@ std::string help_text()
                    "filmgrain:colorspace names the colour space.");
     out << "\nPreview:\n";
     append_wrapped(out, "    ",
-                   "The negative as a positive through OCIO: density above D-min -> ADX10 (as "
-                   "output=adx10) -> the config's ADX10 colour space -> the config's default "
-                   "display and its default view (embedded config: sRGB, ACES 1.0 - SDR Video), "
-                   "8-bit PNG. Without an ADX10 colour space in the config, or for a stock whose "
-                   "layers are not R, G, B (nor one layer), a plain inversion, with a warning: "
-                   "p = clamp((D - base density) / (D_hi - base density), 0, 1), D_hi the 99.9th "
-                   "percentile of the density over all layers, encoded as p^(1/2.2).");
+                   "The negative as a timed print through OCIO: density -> ADX16 as "
+                   "output=adx16:timing=grey (unrounded; the stock's 18% grey lands on ACES "
+                   "0.18 in every channel; a one-layer stock with gains 1, so silver stays "
+                   "neutral) -> the config's ADX16 colour space (ADX10 without one) -> the "
+                   "config's default display and its default view (embedded config: sRGB, "
+                   "ACES 1.0 - SDR Video), 8-bit PNG. An exposure offset shows (the timing is "
+                   "the stock's, not the frame's). Without an ADX colour space in the config, "
+                   "or for a stock whose layers are not R, G, B (nor one layer), a plain "
+                   "inversion, with a warning: p = clamp((D - base density) / (D_hi - base "
+                   "density), 0, 1), D_hi the 99.9th percentile of the density over all layers, "
+                   "encoded as p^(1/2.2).");
     out << "\nProgress and messages go to stderr; errors read 'filmgrain: error: ...'.\n"
         << "On any error or interruption no output file (-o, --stats, --preview) of the\n"
         << "image being rendered is created. Progress shows on a terminal once a run takes\n"

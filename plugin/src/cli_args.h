@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "input_image.h"
 #include "filmgrain/status.h"
 #include "modifiers.h"
 
@@ -15,6 +16,8 @@ enum class OutputType { float32, half16 };
 /// consistency (see validate_render_args) nor against the files.
 struct CliArgs {
     std::string input;  ///< INPUT (empty: none)
+    /// Which part, view and channels of INPUT (--subimage, --view, --ch).
+    InputSelection input_selection;
     bool wedge = false;  ///< --wedge: the built-in step wedge instead of INPUT
     bool chart = false;  ///< --chart: the built-in look chart instead of INPUT
 

@@ -143,14 +143,17 @@ bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMap
 }
 
 /// The input the render reads, as an ImageView in film coordinates (0,0 =
-/// the film's corner: the display window's, unless there is overscan). When src holds float pixels in memory that
-/// cover the window and dst is another image, the view points straight into
-/// src (no copy); otherwise just the window is copied into `pixels`
-/// (pixels outside src's data window read as 0, OIIO's convention), so a
-/// cache-backed src is read only where the render looks.
+/// the film's corner: the display window's, unless there is overscan).
+/// When src holds float pixels in memory that cover the window and dst is
+/// another image, the view points straight into src (no copy); otherwise
+/// just the window is copied into `pixels`, so a cache-backed src is read
+/// only where the render looks. Pixels of the film outside src's data
+/// window (a data window inside the display window) are the nearest data
+/// pixel's (`edge` clamp: the scene continues, MODEL.md 2), or 0 (gate,
+/// OIIO's convention).
 bool source_view(const OIIO::ImageBuf& src, bool dst_aliases_src, const Roi& window,
-                 const FilmMapping& film, std::vector<float>& pixels, ImageView& view,
-                 std::string& error)
+                 const FilmMapping& film, FrameEdge edge, std::vector<float>& pixels,
+                 ImageView& view, std::string& error)
 {
     const OIIO::ImageSpec& spec = src.spec();
     const int64_t fx = film.film_x, fy = film.film_y;
@@ -176,13 +179,45 @@ bool source_view(const OIIO::ImageBuf& src, bool dst_aliases_src, const Roi& win
         return true;
     }
     const int nc = spec.nchannels == 1 ? 1 : 3;
-    OIIO::ROI roi(static_cast<int>(window.x_begin + fx), static_cast<int>(window.x_end + fx),
-                  static_cast<int>(window.y_begin + fy), static_cast<int>(window.y_end + fy), 0, 1,
-                  0, nc);
     pixels.resize(static_cast<size_t>(std::max<int64_t>(1, window.npixels())) * nc);
-    if (!window.empty() && !src.get_pixels(roi, OIIO::TypeFloat, pixels.data())) {
-        error = OIIO::Strutil::fmt::format("cannot read the source pixels: {}", src.geterror());
-        return false;
+    const bool inside = dx0 <= window.x_begin && dy0 <= window.y_begin
+                        && dx0 + spec.width >= window.x_end && dy0 + spec.height >= window.y_end;
+    if (edge == FrameEdge::clamp && !inside && !window.empty()) {
+        // Beyond src's data window the scene continues (MODEL.md 2): each
+        // pixel there is the nearest data pixel's. Row by row: the data
+        // row nearest, its span under the window read once, the runs
+        // beyond its ends filled with them.
+        const int64_t ww = window.width();
+        for (int64_t y = window.y_begin; y < window.y_end; ++y) {
+            const int64_t sy = std::clamp<int64_t>(y + fy, spec.y, int64_t(spec.y) + spec.height - 1);
+            const int64_t sx0 = std::clamp<int64_t>(window.x_begin + fx, spec.x,
+                                                    int64_t(spec.x) + spec.width - 1);
+            const int64_t sx1 = std::clamp<int64_t>(window.x_end - 1 + fx, spec.x,
+                                                    int64_t(spec.x) + spec.width - 1);
+            float* row = pixels.data() + static_cast<size_t>((y - window.y_begin) * ww) * nc;
+            float* span = row + static_cast<size_t>(sx0 - fx - window.x_begin) * nc;
+            const OIIO::ROI read(static_cast<int>(sx0), static_cast<int>(sx1 + 1),
+                                 static_cast<int>(sy), static_cast<int>(sy + 1), 0, 1, 0, nc);
+            if (!src.get_pixels(read, OIIO::TypeFloat, span)) {
+                error = OIIO::Strutil::fmt::format("cannot read the source pixels: {}",
+                                                   src.geterror());
+                return false;
+            }
+            for (int64_t x = 0; x < sx0 - fx - window.x_begin; ++x)
+                std::copy_n(span, nc, row + static_cast<size_t>(x) * nc);
+            const float* last = row + static_cast<size_t>(sx1 - fx - window.x_begin) * nc;
+            for (int64_t x = sx1 - fx - window.x_begin + 1; x < ww; ++x)
+                std::copy_n(last, nc, row + static_cast<size_t>(x) * nc);
+        }
+    } else {
+        OIIO::ROI roi(static_cast<int>(window.x_begin + fx), static_cast<int>(window.x_end + fx),
+                      static_cast<int>(window.y_begin + fy), static_cast<int>(window.y_end + fy),
+                      0, 1, 0, nc);
+        if (!window.empty() && !src.get_pixels(roi, OIIO::TypeFloat, pixels.data())) {
+            error = OIIO::Strutil::fmt::format("cannot read the source pixels: {}",
+                                               src.geterror());
+            return false;
+        }
     }
     view.pixels   = pixels.data();
     view.width    = window.width();
@@ -217,6 +252,7 @@ void set_metadata(OIIO::ImageSpec& spec, const FilmgrainOptions& opts)
     spec.attribute("filmgrain:exposure_stops", static_cast<float>(opts.scene.exposure_stops));
     spec.attribute("filmgrain:shutter_s", static_cast<float>(opts.scene.shutter_s));
     spec.attribute("filmgrain:frame_width_mm", static_cast<float>(opts.scene.frame_width_mm));
+    spec.attribute("filmgrain:edge", frame_edge_name(opts.scene.edge));
     spec.attribute("filmgrain:engine", engine_name(opts.engine_options.engine));
     spec.attribute("filmgrain:version", version_string());
 }
@@ -292,7 +328,7 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     }
     std::vector<float> packed;
     ImageView view;
-    if (!source_view(src, &dst == &src, window, film, packed, view, error)) {
+    if (!source_view(src, &dst == &src, window, film, opts.scene.edge, packed, view, error)) {
         dst.errorfmt("filmgrain: {}", error);
         return false;
     }
@@ -332,6 +368,18 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
         !s) {
         dst.errorfmt("filmgrain: {}", s.message());
         return false;
+    }
+    if (stats) {
+        // The core read the window over the film; the pixels read are those
+        // of src's data window in it (the rest of the film is no light).
+        const OIIO::ImageSpec& in = src.spec();
+        const int64_t dx0 = in.x - film.film_x, dy0 = in.y - film.film_y;
+        const int64_t w   = std::min<int64_t>(window.x_end, dx0 + in.width)
+                          - std::max<int64_t>(window.x_begin, dx0);
+        const int64_t h   = std::min<int64_t>(window.y_end, dy0 + in.height)
+                          - std::max<int64_t>(window.y_begin, dy0);
+        stats->input.pixels_read = static_cast<uint64_t>(std::max<int64_t>(0, w))
+                                   * static_cast<uint64_t>(std::max<int64_t>(0, h));
     }
     return true;
 }

@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "cli_args.h"
+#include "input_image.h"
 #include "filmgrain/chart.h"
 #include "filmgrain/imagebufalgo_filmgrain.h"
 #include "filmgrain/ocio.h"
@@ -229,200 +230,6 @@ int print_stock(const std::string& name_or_path, const Console& con)
 
 // ---------------------------------------------------------------------------
 // Rendering stages.
-
-// Input size limits, checked against the file's header before any pixel
-// is allocated (README "Limits and guarantees"). The input is read as
-// float: at the limits that is 8 GiB.
-constexpr int64_t kMaxInputSide   = int64_t(1) << 20;  ///< pixels a side (1048576)
-constexpr int64_t kMaxInputPixels = int64_t(1) << 28;  ///< pixels (268435456: 16384^2)
-constexpr int64_t kMaxInputValues = int64_t(1) << 31;  ///< pixels x channels
-constexpr int kMaxInputChannels   = 1024;
-
-/// Checks what a file's header declares: a 2D, non-deep image with at least
-/// one pixel, within the limits above. A corrupt header that claims 1e6 x
-/// 1e6 pixels is refused here, before anything is allocated for it.
-Status check_input_spec(const std::string& path, const OIIO::ImageSpec& spec)
-{
-    const int64_t w = spec.width, h = spec.height, d = spec.depth, nc = spec.nchannels;
-    if (w <= 0 || h <= 0 || nc <= 0)
-        return Status::errorf("input '", path, "' declares ", w, "x", h, " pixels of ", nc,
-                              " channels: an image needs at least one pixel and one channel");
-    if (d > 1)
-        return Status::errorf("input '", path, "' is a volume (depth ", d,
-                              "): expected a 2D image");
-    if (spec.deep)
-        return Status::errorf("input '", path, "' is a deep image: not supported");
-    if (w > kMaxInputSide || h > kMaxInputSide || w * h > kMaxInputPixels
-        || nc > kMaxInputChannels || w * h * nc > kMaxInputValues)
-        return Status::errorf("input '", path, "' declares ", w, "x", h, " pixels of ", nc,
-                              " channels: larger than filmgrain reads (at most ", kMaxInputSide,
-                              " pixels a side, ", kMaxInputPixels, " pixels, ",
-                              kMaxInputChannels, " channels and ", kMaxInputValues,
-                              " channel values); refused before reading it (a corrupt header?)");
-    const int nchannels = spec.nchannels;
-    if (nchannels != 1 && nchannels < 3)
-        return Status::errorf("input '", path, "' has ", nchannels,
-                              " channels: expected 1 (grey) or at least 3 (R, G, B first)");
-    return {};
-}
-
-/// With roi=, the rectangle of the input's data window (file coordinates)
-/// that the render reads: required_input_window's window (the ROI's film
-/// region grown by the largest grain radius), clipped to the data window.
-/// False when the whole image is to be read: no roi, or a roi the operator
-/// will refuse (it then reports the error, as for any input).
-bool roi_read_window(const FilmgrainOptions& opts, const FilmgrainCommand& cmd,
-                     const OIIO::ImageSpec& spec, OIIO::ROI& window)
-{
-    if (!cmd.has_roi)
-        return false;
-    // The frame is the display window, else the data window (as the
-    // operator's). A plate with overscan (data beyond the display window)
-    // is read whole.
-    if (has_overscan(spec))
-        return false;
-    const OIIO::ROI frame = film_frame_window(spec);
-    const int64_t fx = frame.xbegin, fy = frame.ybegin, fw = frame.width(), fh = frame.height();
-    RenderSettings settings;
-    settings.scan_width  = opts.scan_width;
-    settings.scan_height = opts.scan_height;
-    settings.roi         = Roi { cmd.roi_x, cmd.roi_y, cmd.roi_x + cmd.roi_width,
-                                 cmd.roi_y + cmd.roi_height };
-    ScanGeometry scan;
-    if (!frame_scan(spec, opts, scan))
-        return false;
-    const Roi& r = settings.roi;
-    if (r.x_begin < 0 || r.y_begin < 0 || r.x_end > scan.width || r.y_end > scan.height
-        || r.x_end <= r.x_begin || r.y_end <= r.y_begin)
-        return false;
-    Roi w;
-    if (!required_input_window(opts.stock, opts.scene, fw, fh, settings, w) || w.empty())
-        return false;
-    const int64_t x0 = std::max<int64_t>(w.x_begin + fx, spec.x);
-    const int64_t y0 = std::max<int64_t>(w.y_begin + fy, spec.y);
-    const int64_t x1 = std::min<int64_t>(w.x_end + fx, int64_t(spec.x) + spec.width);
-    const int64_t y1 = std::min<int64_t>(w.y_end + fy, int64_t(spec.y) + spec.height);
-    if (x0 >= x1 || y0 >= y1)
-        return false;
-    window = OIIO::ROI(static_cast<int>(x0), static_cast<int>(x1), static_cast<int>(y0),
-                       static_cast<int>(y1), 0, 1, 0, spec.nchannels);
-    return true;
-}
-
-/// Reads `window` (file coordinates, inside the data window, all channels)
-/// of subimage 0 as float into `dst`, rows of window.width() pixels:
-/// scanline files in strips of whole scanlines, tiled files as the tiles
-/// that cover the window; only the window is kept.
-bool read_window(OIIO::ImageInput& in, const OIIO::ROI& window, float* dst)
-{
-    const OIIO::ImageSpec& spec = in.spec();
-    const int nc                = spec.nchannels;
-    const size_t row_values     = static_cast<size_t>(window.width()) * nc;
-    std::vector<float> buf;
-    if (spec.tile_width > 0) {
-        const int tw = spec.tile_width, th = spec.tile_height > 0 ? spec.tile_height : 1;
-        const int xb = spec.x + (window.xbegin - spec.x) / tw * tw;
-        const int yb = spec.y + (window.ybegin - spec.y) / th * th;
-        const int xe = std::min(spec.x + spec.width,
-                                spec.x + (window.xend - spec.x + tw - 1) / tw * tw);
-        const int ye = std::min(spec.y + spec.height,
-                                spec.y + (window.yend - spec.y + th - 1) / th * th);
-        const size_t w = static_cast<size_t>(xe - xb);
-        buf.resize(w * static_cast<size_t>(ye - yb) * nc);
-        if (!in.read_tiles(0, 0, xb, xe, yb, ye, 0, 1, 0, nc, OIIO::TypeFloat, buf.data()))
-            return false;
-        for (int y = window.ybegin; y < window.yend; ++y)
-            std::copy_n(buf.data() + (static_cast<size_t>(y - yb) * w + (window.xbegin - xb)) * nc,
-                        row_values, dst + static_cast<size_t>(y - window.ybegin) * row_values);
-        return true;
-    }
-    // Strips of at most ~64 MiB of whole scanlines.
-    const size_t line_values = static_cast<size_t>(spec.width) * nc;
-    const int strip = static_cast<int>(std::clamp<size_t>(
-        (size_t(64) << 20) / (line_values * sizeof(float)), 1, 1024));
-    buf.resize(line_values * static_cast<size_t>(std::min(strip, window.height())));
-    for (int y0 = window.ybegin; y0 < window.yend; y0 += strip) {
-        const int y1 = std::min(window.yend, y0 + strip);
-        if (!in.read_scanlines(0, 0, y0, y1, 0, 0, nc, OIIO::TypeFloat, buf.data()))
-            return false;
-        for (int y = y0; y < y1; ++y)
-            std::copy_n(buf.data() + static_cast<size_t>(y - y0) * line_values
-                            + static_cast<size_t>(window.xbegin - spec.x) * nc,
-                        row_values, dst + static_cast<size_t>(y - window.ybegin) * row_values);
-    }
-    return true;
-}
-
-/// Reads subimage 0 of `path` as float: the whole data window, or with
-/// roi= only the part the render reads (roi_read_window), so that a
-/// 256x256 ROI of a 16K frame reads, converts and holds a few hundred
-/// pixels a side. The buffer keeps the file's display window, so the
-/// operator places it on the frame. `header` is the file's own spec.
-/// Through ImageInput rather than ImageBuf::read so that the header is
-/// checked before the pixels are allocated, and so that a short read is an
-/// error: ImageBuf::read reports success on a truncated uncompressed TIFF
-/// (libtiff's "Read error at scanline" reaches only the ImageInput),
-/// leaving zeros and garbage where the missing pixels were.
-Status read_input(const std::string& path, const FilmgrainOptions& opts,
-                  const FilmgrainCommand& cmd, OIIO::ImageBuf& out, OIIO::ImageSpec& header)
-{
-    std::error_code ec;
-    if (!fs::exists(path, ec))
-        return Status::errorf("input '", path, "' does not exist");
-    if (fs::is_directory(path, ec))
-        return Status::errorf("input '", path, "' is a directory, not an image");
-    // Keep unassociated alpha as stored: colour channels are read unchanged
-    // (alpha itself is ignored by the simulation).
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    auto in = OIIO::ImageInput::open(path, &config);
-    if (!in) {
-        const std::string why = trim(OIIO::geterror());
-        return Status::errorf("cannot read input '", path, "': ",
-                              why.empty() ? std::string("not an image OpenImageIO can read")
-                                          : why);
-    }
-    if (Status s = check_input_spec(path, in->spec()); !s)
-        return s;
-    header               = in->spec();
-    OIIO::ImageSpec spec = in->spec();
-    spec.set_format(OIIO::TypeFloat);  // also clears per-channel formats
-    OIIO::ROI window;
-    const bool part = roi_read_window(opts, cmd, spec, window)
-                      && window != OIIO::ROI(spec.x, spec.x + spec.width, spec.y,
-                                             spec.y + spec.height, 0, 1, 0, spec.nchannels);
-    if (part) {
-        // The frame stays the whole image's (the operator reads the full
-        // window as the frame, else the data window).
-        if (spec.full_width <= 0) {
-            spec.full_x     = spec.x;
-            spec.full_width = spec.width;
-        }
-        if (spec.full_height <= 0) {
-            spec.full_y      = spec.y;
-            spec.full_height = spec.height;
-        }
-        spec.x      = window.xbegin;
-        spec.y      = window.ybegin;
-        spec.width  = window.width();
-        spec.height = window.height();
-    }
-    OIIO::ImageBuf buf(spec);
-    float* pixels = static_cast<float*>(buf.localpixels());
-    if (!pixels)
-        return Status::errorf("cannot read input '", path, "': cannot allocate ", spec.width,
-                              "x", spec.height, "x", spec.nchannels, " floats");
-    const bool ok = part ? read_window(*in, window, pixels)
-                         : in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeFloat, pixels);
-    const std::string why = trim(in->geterror());
-    in->close();
-    if (!ok || !why.empty())
-        return Status::errorf("cannot read input '", path, "': ",
-                              why.empty() ? std::string("read failed (truncated or corrupt?)")
-                                          : why);
-    out = std::move(buf);
-    return {};
-}
 
 /// Output limits (README "Limits and guarantees"): the rendered region
 /// (the ROI, else the whole scan) is allocated as floats, one per layer.
@@ -708,18 +515,21 @@ Status write_image(OutputFiles& files, const std::string& final_path, OIIO::Imag
     return {};
 }
 
-/// The positive preview of the negative `density`: through ADX and the
-/// OCIO config's display view (make_film_preview), or the plain inversion
-/// with a warning where the config cannot.
+/// The positive preview of the negative `density`: a timed print through
+/// ADX and the OCIO config's display view (make_film_preview), or the plain
+/// inversion with a warning where the config cannot. `cache`: the run's
+/// printing density transform (built by the first frame).
 Status write_preview(OutputFiles& files, const OIIO::ImageBuf& density,
                      const FilmgrainOptions& opts, const std::string& colorconfig,
-                     const Console& con, const std::string& final_path)
+                     const Console& con, const std::string& final_path,
+                     const std::shared_ptr<std::optional<AdxTransform>>& cache)
 {
     const OIIO::ImageSpec& ds = density.spec();
     Preview p;
     std::string warning;
     if (Status s = make_film_preview(static_cast<const float*>(density.localpixels()), ds.width,
-                                     ds.height, opts.stock, opts.scene, colorconfig, p, warning);
+                                     ds.height, opts.stock, opts.scene, colorconfig, p, warning,
+                                     cache);
         !s)
         return Status::errorf("preview: ", s.message());
     if (!warning.empty())
@@ -751,6 +561,12 @@ struct RenderContext {
     /// output=regrain's expected curves, built by the first frame.
     std::shared_ptr<std::vector<ExpectedCurve>> regrain_curves
         = std::make_shared<std::vector<ExpectedCurve>>();
+    /// output=adx10|adx16's and the preview's printing density transforms
+    /// (MODEL.md 11), built by the first frame.
+    std::shared_ptr<std::optional<AdxTransform>> adx_transform
+        = std::make_shared<std::optional<AdxTransform>>();
+    std::shared_ptr<std::optional<AdxTransform>> preview_transform
+        = std::make_shared<std::optional<AdxTransform>>();
 };
 
 /// Identifies what an output was made from, for --skip-existing: a SHA-1
@@ -774,7 +590,8 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                       { "frame_width_mm", sc.frame_width_mm },
                       { "seed", sc.seed },
                       { "frame", sc.frame ? Json(*sc.frame) : Json(nullptr) },
-                      { "static", sc.static_grain } };
+                      { "static", sc.static_grain },
+                      { "edge", frame_edge_name(sc.edge) } };
     j["engine"]   = { { "engine", engine_name(e.engine) },
                       { "tolerance", e.tolerance },
                       { "kinetics", e.kinetics ? kinetics_method_name(*e.kinetics) : "" },
@@ -789,6 +606,15 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                                 : Json(nullptr);
     j["output"]   = { { "kind", output_kind_name(cmd.output) },
                       { "ocolorspace", a.has_ocolorspace ? a.ocolorspace : "" } };
+    // ADX and the preview are printing densities with ADX's gains since
+    // MODEL.md 11 (issue 40): files written before (Status M, no gains,
+    // untimed previews) are not up to date. Density and regrain outputs
+    // without a preview keep their hashes.
+    if (cmd.output == OutputKind::adx10 || cmd.output == OutputKind::adx16)
+        j["output"]["adx"] = { { "encoding", "apd, k (1, 0.92, 0.95)" },
+                               { "timing", adx_timing_name(cmd.timing) } };
+    if (!job.preview.empty())
+        j["preview"] = "adx16 timed on grey";
     j["type"]     = a.output_type == OutputType::half16 ? "half" : "float";
     j["compression"] = a.output_modifiers.compression;
     const char* ocio_env = std::getenv("OCIO");
@@ -892,12 +718,21 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
                  + "x" + std::to_string(src.spec().height)
                  + (a.wedge ? " scene-linear grey" : " scene-linear RGB"));
     } else {
-        if (Status s = read_input(job.input, opts, cmd, src, header); !s)
+        // Everything the header says is checked before any pixel is read.
+        InputHeader input;
+        if (Status s = read_input_header(job.input, a.input_selection, input); !s)
             return s;
+        if (Status s = check_output_size(opts, input.spec, cmd); !s)
+            return Status::errorf("input '", job.input, "': ", s.message());
+        con.info("input: " + input.description);
+        if (Status s = read_input_pixels(job.input, input, opts, cmd, src); !s)
+            return s;
+        header            = input.spec;
         report.input_file = job.input;
     }
-    if (Status s = check_output_size(opts, header, cmd); !s)
-        return s;
+    if (a.wedge || a.chart)
+        if (Status s = check_output_size(opts, header, cmd); !s)
+            return s;
     report.seconds.read = seconds_since(t);
     if (interrupted())
         return Status::error("interrupted");
@@ -964,7 +799,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     OIIO::ImageBuf& result = cmd.output == OutputKind::density ? dst : transformed;
     OutputReport output_report;
     if (Status s = apply_output(
-            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves }, opts,
+            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves,
+                            cmd.timing, ctx.adx_transform },
+            opts,
             src, dst, result, output_report);
         !s)
         return s;
@@ -980,7 +817,9 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     if (Status s = write_image(files, job.output, result, type, "openexr"); !s)
         return s;
     if (!job.preview.empty())
-        if (Status s = write_preview(files, dst, opts, a.colorconfig, con, job.preview); !s)
+        if (Status s = write_preview(files, dst, opts, a.colorconfig, con, job.preview,
+                                     ctx.preview_transform);
+            !s)
             return s;
     report.seconds.write = seconds_since(t);
     report.seconds.total = seconds_since(t_start);
@@ -1036,6 +875,19 @@ int render(const CliArgs& a, const Console& con)
                 opts.scene.frame = *job.frame;
             const std::string hash = settings_hash(ctx, opts, job);
             std::error_code ec;
+            const bool exists = a.wedge || a.chart || fs::exists(job.input, ec);
+            // What the render would refuse from the input's header (its
+            // pixels are not read): null when nothing.
+            std::string refusal;
+            if (exists && !a.wedge && !a.chart) {
+                InputHeader input;
+                Status st = read_input_header(job.input, a.input_selection, input);
+                if (st)
+                    if (Status o = check_output_size(opts, input.spec, cmd); !o)
+                        st = Status::errorf("input '", job.input, "': ", o.message());
+                if (!st)
+                    refusal = st.message();
+            }
             const nlohmann::ordered_json line
                 = { { "frame", job.frame ? nlohmann::ordered_json(*job.frame)
                                          : nlohmann::ordered_json(nullptr) },
@@ -1045,7 +897,9 @@ int render(const CliArgs& a, const Console& con)
                     { "output", job.output },
                     { "stats", job.stats },
                     { "preview", job.preview },
-                    { "input_exists", a.wedge || a.chart || fs::exists(job.input, ec) },
+                    { "input_exists", exists },
+                    { "error", refusal.empty() ? nlohmann::ordered_json(nullptr)
+                                               : nlohmann::ordered_json(refusal) },
                     { "settings_hash", hash },
                     { "up_to_date", up_to_date(job, hash) } };
             std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace)

@@ -207,6 +207,15 @@ bool parse_static(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return true;
 }
 
+bool parse_edge(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (!parse_frame_edge(std::string(v), cmd.scene.edge)) {
+        why = "must be clamp or gate";
+        return false;
+    }
+    return true;
+}
+
 bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     cmd.has_width_mm = true;
@@ -377,6 +386,15 @@ bool parse_output_value(std::string_view v, FilmgrainCommand& cmd, std::string& 
     return true;
 }
 
+bool parse_timing_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
+{
+    if (!parse_adx_timing(v, cmd.timing)) {
+        why = "unknown timing (known: off, grey)";
+        return false;
+    }
+    return true;
+}
+
 std::string engine_choice(const char* what) { return std::string("the engine's choice (") + what + ")"; }
 
 /// RenderSettings::tile_size_px's documented range.
@@ -438,6 +456,12 @@ const Modifier kModifiers[] = {
     { "static", "0|1", "1: the same grain on every frame (the seed as is, frame ignored)",
       [](const FilmgrainCommand& d) { return std::string(d.scene.static_grain ? "1" : "0"); },
       parse_static },
+    { "edge", "clamp|gate",
+      "beyond the input's data window (MODEL.md 2): clamp = the scene continues, each point "
+      "exposed as the nearest edge pixel (a plate is a crop of the picture the lens made); "
+      "gate = no light (a frame's hard edge inside a camera gate)",
+      [](const FilmgrainCommand& d) { return std::string(frame_edge_name(d.scene.edge)); },
+      parse_edge },
     { "width_mm", "MM", "width of the film frame, millimetres, (0, 1e9]",
       [](const FilmgrainCommand& d) { return format_number(d.scene.frame_width_mm); },
       parse_width_mm },
@@ -514,6 +538,13 @@ const Modifier kModifiers[] = {
       "plus the film's grain, in --ocolorspace (see Output below)",
       [](const FilmgrainCommand& d) { return std::string(output_kind_name(d.output)); },
       parse_output_value },
+    { "timing", "off|grey",
+      "ADX's printer lights (output=adx10|adx16 only): off = the standard encoding, the "
+      "stock's printing densities above D-min; grey = per-channel offsets that put the stock's "
+      "own 18% grey card on CDD 0.70 (ADX16 7120, ACES 0.18) in every channel, as a lab times "
+      "a negative (see Output below)",
+      [](const FilmgrainCommand& d) { return std::string(adx_timing_name(d.timing)); },
+      parse_timing_value },
 };
 
 std::string modifier_list()

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "filmgrain/printing_density.h"
 #include "filmgrain/render.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
@@ -49,6 +50,10 @@ struct FilmgrainCommand {
     /// `output=density|adx10|adx16|regrain`: what the EXR holds
     /// (output_transform.h).
     OutputKind output = OutputKind::density;
+    /// `timing=off|grey`: ADX's printer lights (MODEL.md 11); grey puts the
+    /// stock's own 18% grey on CDD 0.70 in every channel. Only with
+    /// output=adx10|adx16 (apply_output refuses it otherwise).
+    AdxTiming timing = AdxTiming::off;
 };
 
 /// One modifier as documented by --help: its key, the form of its value,

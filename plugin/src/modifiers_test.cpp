@@ -84,6 +84,8 @@ TEST(Modifiers, Forms)
     EXPECT_EQ(parse_ok("--filmgrain:frame=1000000000").scene.frame, 1000000000);
     EXPECT_TRUE(parse_ok("--filmgrain:frame=1:static=1").scene.static_grain);
     EXPECT_FALSE(parse_ok("--filmgrain:static=0").scene.static_grain);
+    EXPECT_EQ(parse_ok("--filmgrain:edge=gate").scene.edge, FrameEdge::gate);
+    EXPECT_EQ(parse_ok("--filmgrain").scene.edge, FrameEdge::clamp);
 }
 
 TEST(Modifiers, UnknownModifierNamesItAndListsTheValidOnes)
@@ -118,6 +120,7 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:frame=1.5", { "frame=1.5", "whole number", "N" } },
         { "--filmgrain:frame=--1", { "frame=--1", "whole number", "N" } },
         { "--filmgrain:static=2", { "static=2", "0 or 1", "0|1" } },
+        { "--filmgrain:edge=wrap", { "edge=wrap", "clamp or gate", "clamp|gate" } },
         { "--filmgrain:scan=0x0", { "scan=0x0", "at least 1", "WxH" } },
         { "--filmgrain:scan=10x", { "scan=10x", "height", "WxH" } },
         { "--filmgrain:scan=x10", { "scan=x10", "width", "WxH" } },
@@ -165,10 +168,10 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
 {
     const auto docs = filmgrain_modifier_docs();
     const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "frame",
-                           "static",   "width_mm",
+                           "static",   "edge",     "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
                            "photons",  "coverage", "grains",  "scale",    "samples",
-                           "tile",     "output" };
+                           "tile",     "output",   "timing" };
     ASSERT_EQ(docs.size(), std::size(keys));
     for (size_t i = 0; i < docs.size(); ++i) {
         EXPECT_EQ(docs[i].key, keys[i]);
@@ -189,6 +192,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
     EXPECT_EQ(default_of("engine"), engine_name(RenderSettings().engine));
     EXPECT_EQ(default_of("tile"), std::to_string(RenderSettings().tile_size_px));
     EXPECT_EQ(default_of("static"), "0");
+    EXPECT_EQ(default_of("edge"), "clamp");
 }
 
 TEST(Modifiers, OutputModifiers)
@@ -267,6 +271,23 @@ TEST(Modifiers, OutputKind)
     for (const ModifierDoc& d : filmgrain_modifier_docs())
         documented |= d.key == "output" && d.default_text == "density"
                       && d.form == "density|adx10|adx16|regrain";
+    EXPECT_TRUE(documented);
+}
+
+TEST(Modifiers, AdxTiming)
+{
+    EXPECT_EQ(FilmgrainCommand().timing, AdxTiming::off);
+    EXPECT_EQ(parse_ok("--filmgrain:output=adx16:timing=grey").timing, AdxTiming::grey);
+    EXPECT_EQ(parse_ok("--filmgrain:output=adx10:timing=off").timing, AdxTiming::off);
+    for (const char* bad : { "gray", "Grey", "on", "1" }) {
+        const std::string e = parse_error(std::string("--filmgrain:timing=") + bad);
+        EXPECT_NE(e.find(std::string("timing=") + bad + ": unknown timing (known: off, grey)"),
+                  std::string::npos)
+            << e;
+    }
+    bool documented = false;
+    for (const ModifierDoc& d : filmgrain_modifier_docs())
+        documented |= d.key == "timing" && d.default_text == "off" && d.form == "off|grey";
     EXPECT_TRUE(documented);
 }
 

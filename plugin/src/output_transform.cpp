@@ -17,59 +17,7 @@ namespace filmgrain::cli {
 
 AdxEncoding adx_encoding(OutputKind kind)
 {
-    if (kind == OutputKind::adx10)
-        return { "ADX10", 95.0, 500.0, 1023.0 };
-    return { "ADX16", 1520.0, 8000.0, 65535.0 };
-}
-
-namespace {
-
-std::string join_names(const std::vector<std::string>& names)
-{
-    std::string s;
-    for (const std::string& n : names)
-        s += (s.empty() ? "" : ", ") + n;
-    return s;
-}
-
-}  // namespace
-
-Status adx_layers(const std::vector<std::string>& names, std::array<int, 3>& out)
-{
-    if (names.size() == 1) {
-        out = { 0, 0, 0 };
-        return {};
-    }
-    const char* rgb[3] = { "R", "G", "B" };
-    for (int c = 0; c < 3; ++c) {
-        const auto it = std::find(names.begin(), names.end(), rgb[c]);
-        if (it == names.end())
-            return Status::errorf("ADX needs the layers named R, G and B (the red-, green- and "
-                                  "blue-sensitive layers, whose densities stand for the "
-                                  "printing densities) or a single layer; the stock's layers "
-                                  "are ", join_names(names), " (no layer ", rgb[c], ")");
-        out[static_cast<size_t>(c)] = static_cast<int>(it - names.begin());
-    }
-    return {};
-}
-
-uint64_t encode_adx(const float* density, size_t npixels, int nlayers,
-                    const std::array<int, 3>& layers, const std::vector<double>& d_min,
-                    const AdxEncoding& enc, float* rgb)
-{
-    uint64_t clamped = 0;
-    for (size_t i = 0; i < npixels; ++i)
-        for (size_t c = 0; c < 3; ++c) {
-            const int l    = layers[c];
-            const double d = density[i * static_cast<size_t>(nlayers) + static_cast<size_t>(l)];
-            double code    = std::round(enc.offset + enc.scale * (d - d_min[static_cast<size_t>(l)]));
-            if (!std::isfinite(code) || code < 0.0 || code > enc.max_code) {
-                ++clamped;
-                code = std::isfinite(code) ? std::clamp(code, 0.0, enc.max_code) : 0.0;
-            }
-            rgb[i * 3 + c] = static_cast<float>(code / enc.max_code);
-        }
-    return clamped;
+    return kind == OutputKind::adx10 ? kAdx10 : kAdx16;
 }
 
 // --- Regrain ---------------------------------------------------------------
@@ -221,25 +169,35 @@ OIIO::ImageBuf rgb_like(const OIIO::ImageBuf& density)
     return OIIO::ImageBuf(spec);
 }
 
+/// "R a, G b, B c" with `sign` forcing a '+' on positive values.
+std::string rgb_text(const Density3& v, bool sign = false)
+{
+    std::string out;
+    const char* rgb[3] = { "R", "G", "B" };
+    for (size_t c = 0; c < 3; ++c)
+        out += std::string(c ? ", " : "") + rgb[c] + " " + (sign && v[c] >= 0.0 ? "+" : "")
+               + format_g(v[c]);
+    return out;
+}
+
 Status apply_adx(const OutputRequest& req, const FilmgrainOptions& opts,
                  const OIIO::ImageBuf& density, OIIO::ImageBuf& result, OutputReport& report)
 {
     const Stock& stock = opts.stock;
-    std::vector<std::string> names;
-    for (const Layer& l : stock.layers)
-        names.push_back(l.name);
-    std::array<int, 3> layers {};
-    if (Status s = adx_layers(names, layers); !s)
-        return Status::errorf("output=", output_kind_name(req.kind), ": ", s.message());
-    // D-min: each layer's expected density at zero exposure (base + fog).
-    ExpectedCurveOptions o;
-    o.fog_only = true;
-    std::vector<ExpectedCurve> curves;
-    if (Status s = expected_curves(stock, opts.scene, o, curves); !s)
-        return s;
-    report.d_min.clear();
-    for (const ExpectedCurve& c : curves)
-        report.d_min.push_back(c.min_density());
+    const std::string what = std::string("output=") + output_kind_name(req.kind);
+    // MODEL.md 11, prepared by the core once per run (cached by the caller).
+    AdxTransform transform;
+    if (req.adx_cache && req.adx_cache->has_value()) {
+        transform = **req.adx_cache;
+    } else {
+        AdxOptions o;
+        o.timing = req.timing;
+        if (Status s = stock_adx_transform(stock, opts.scene, o, transform); !s)
+            return Status::errorf(what, req.timing == AdxTiming::grey ? ":timing=grey" : "",
+                                  ": ", s.message());
+        if (req.adx_cache)
+            *req.adx_cache = transform;
+    }
     const AdxEncoding enc = adx_encoding(req.kind);
     // The colour space as the config spells it (an ACES config's ADX10),
     // else the standard name.
@@ -248,39 +206,43 @@ Status apply_adx(const OutputRequest& req, const FilmgrainOptions& opts,
         return s;
     if (resolved.empty()) {
         resolved = enc.colorspace;
-        report.warnings.push_back(std::string("output=") + output_kind_name(req.kind)
-                                  + ": the OCIO config has no colour space '" + enc.colorspace
-                                  + "': the EXR is tagged " + enc.colorspace
+        report.warnings.push_back(what + ": the OCIO config has no colour space '"
+                                  + enc.colorspace + "': the EXR is tagged " + enc.colorspace
                                   + " (SMPTE ST 2065-3) for a config that has one");
     }
+    const int nl        = static_cast<int>(stock.layers.size());
     const float* pixels = nullptr;
     OIIO::ImageBuf local;
-    if (Status s = local_density(density, static_cast<int>(names.size()), local, pixels); !s)
+    if (Status s = local_density(density, nl, local, pixels); !s)
         return s;
     result                = rgb_like(density);
     const size_t npixels  = static_cast<size_t>(density.spec().image_pixels());
-    report.clamped_values = encode_adx(pixels, npixels, static_cast<int>(names.size()), layers,
-                                       report.d_min, enc,
+    report.clamped_values = encode_adx(transform, enc, pixels, npixels, nl, true,
                                        static_cast<float*>(result.localpixels()));
     report.colorspace = resolved;
+    report.adx        = transform;
     if (report.clamped_values)
         report.warnings.push_back(
             std::to_string(report.clamped_values) + " of the " + std::to_string(npixels * 3)
             + " " + enc.colorspace + " code values were outside [0, "
-            + format_g(enc.max_code) + "] (density above D-min outside ["
+            + format_g(enc.max_code) + "] (CDD outside ["
             + format_g(-enc.offset / enc.scale) + ", "
             + format_g((enc.max_code - enc.offset) / enc.scale) + "]) and were clamped");
     OIIO::ImageSpec& spec = result.specmod();
-    std::string dmin;
-    const char* rgb[3] = { "R", "G", "B" };
-    for (int c = 0; c < 3; ++c)
-        dmin += std::string(c ? ", " : "") + rgb[c] + " "
-                + format_g(report.d_min[static_cast<size_t>(layers[static_cast<size_t>(c)])]);
     spec.attribute("filmgrain:quantity",
                    std::string(enc.colorspace) + " code value / " + format_g(enc.max_code)
                        + ": " + format_g(enc.offset) + " + " + format_g(enc.scale)
-                       + " x (density - D-min), SMPTE ST 2065-3");
-    spec.attribute("filmgrain:adx_dmin", dmin);
+                       + " x CDD, CDD = k (APD - APD D-min)"
+                       + (transform.timing == AdxTiming::grey ? " + timing" : "")
+                       + ", SMPTE ST 2065-3");
+    spec.attribute("filmgrain:printing_density", printing_density_source(transform));
+    spec.attribute("filmgrain:adx_dmin", rgb_text(transform.status_m_dmin));
+    spec.attribute("filmgrain:apd_dmin", rgb_text(transform.apd_dmin));
+    spec.attribute("filmgrain:adx_gains", rgb_text(transform.gains));
+    spec.attribute("filmgrain:adx_timing",
+                   transform.timing == AdxTiming::grey
+                       ? "grey: " + rgb_text(transform.timing_cdd, true)
+                       : std::string("off"));
     return {};
 }
 
@@ -372,6 +334,11 @@ Status apply_output(const OutputRequest& req, const FilmgrainOptions& opts,
         if (req.kind != OutputKind::regrain && !req.ocolorspace.empty())
             return Status::errorf("--ocolorspace ", req.ocolorspace,
                                   " applies to output=regrain only (the output is ",
+                                  output_kind_name(req.kind), ")");
+        if (req.timing != AdxTiming::off && req.kind != OutputKind::adx10
+            && req.kind != OutputKind::adx16)
+            return Status::errorf("timing=", adx_timing_name(req.timing),
+                                  " applies to output=adx10 and adx16 only (the output is ",
                                   output_kind_name(req.kind), ")");
         OIIO::ImageBuf result;
         switch (req.kind) {

@@ -3,31 +3,17 @@
 // positive. The maths runs on plain buffers (tested directly); apply_output
 // is the thin OIIO/OCIO adapter the CLI calls after the operator.
 //
-// ADX (SMPTE ST 2065-3; the ACES ADX10 / ADX16 input transforms, ACESlib
-// ADX_to_ACES): code value = 95 + 500 D (10 bits, [0, 1023]) or 1520 +
-// 8000 D (16 bits, [0, 65535]), D the printing density above D-min. Here D
-// is a layer's density minus that layer's expected density at zero exposure
-// (base + fog: expected_curves, fog_only), R, G, B the layers named R, G, B
-// (a one-layer stock: R = G = B). Code values are rounded and clamped to
-// their range (the clamped values are counted) and stored / 1023 or / 65535,
-// as OCIO's ADX10 / ADX16 colour spaces read them.
+// ADX (MODEL.md 11; SMPTE ST 2065-3; the ACES ADX10 / ADX16 input
+// transforms): the core's printing density chain (filmgrain/
+// printing_density.h), applied here: each layer's Status M density -> APD
+// through the stock's Annex C map (none: APD = Status M) -> CDD = k (APD -
+// APD_Dmin) (+ the grey timing with timing=grey) -> code value 95 + 500 CDD
+// (10 bits) or 1520 + 8000 CDD (16 bits), rounded, clamped to [0, 1023] or
+// [0, 65535] (the clamped values are counted) and stored / 1023 or / 65535,
+// as OCIO's ADX10 / ADX16 colour spaces read them. D-min is each layer's
+// expected density at zero exposure (base + fog); R, G, B are the layers
+// named R, G, B (a one-layer stock: R = G = B).
 //
-// Regrain: per layer, the density is mapped back to the layer's exposure
-// value through the inverse of its expected curve, linearised at the
-// input's expected transmittance T(v_in) (v_in: the layer's value of the
-// input pixel times 1 + halation, what halation makes of a uniform field,
-// MODEL.md 9; v_out - v_in is then divided by that gain):
-//   v_out = v_in - v_in / (T(v_in) g) (T_pixel - T(v_in)),
-//   g = max(gamma(v_in), kRegrainMinGammaFraction * the curve's largest
-//   gamma),
-// which is -(T_pixel - T(v_in)) / T'(v_in) where the curve is steep
-// enough. E[T_pixel] = T(v_in) (MODEL.md 5: the curve is the patch's
-// expected transmittance), so E[v_out] = v_in exactly for any gain: no
-// Jensen bias, unlike the plain inverse v(D_pixel), whose mean exceeds v_in
-// by about exp(0.5 (ln 10 sigma_D / gamma)^2) - 1. The RGB output is
-// rgb_in + M^-1 (v_out - v_in), M the 3x3 matrix of the layers'
-// sensitivities (rows in stock order); a one-layer stock adds the same
-// grain to R, G and B.
 #pragma once
 
 #include <OpenImageIO/half.h>
@@ -37,11 +23,13 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "filmgrain/expected_curve.h"
 #include "filmgrain/imagebufalgo_filmgrain.h"
+#include "filmgrain/printing_density.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
 #include "output_kind.h"
@@ -50,30 +38,8 @@ namespace filmgrain::cli {
 
 // --- ADX -------------------------------------------------------------------
 
-/// One ADX encoding: code value = offset + scale * D in [0, max_code].
-struct AdxEncoding {
-    const char* colorspace;  ///< the OCIO colour space name: "ADX10", "ADX16"
-    double offset;           ///< code value of D-min
-    double scale;            ///< code values per unit density
-    double max_code;         ///< 1023 or 65535 (also the stored divisor)
-};
-
-/// The encoding of OutputKind::adx10 or adx16 (others: adx16's).
+/// The core's encoding of OutputKind::adx10 or adx16 (others: adx16's).
 AdxEncoding adx_encoding(OutputKind kind);
-
-/// The layers that give ADX's R, G and B: the layers named R, G and B, or
-/// layer 0 three times for a one-layer stock. Other stocks: an error naming
-/// the layers.
-Status adx_layers(const std::vector<std::string>& layer_names, std::array<int, 3>& out);
-
-/// Encodes npixels of nlayers interleaved densities into packed RGB code
-/// values / max_code: rgb[3 i + c] = clamp(round(offset + scale (density[i
-/// nlayers + layers[c]] - d_min[layers[c]])), 0, max_code) / max_code. A
-/// non-finite density gives 0. Returns the number of values clamped
-/// (non-finite ones included).
-uint64_t encode_adx(const float* density, size_t npixels, int nlayers,
-                    const std::array<int, 3>& layers, const std::vector<double>& d_min,
-                    const AdxEncoding& enc, float* rgb);
 
 // --- Regrain ---------------------------------------------------------------
 
@@ -125,14 +91,22 @@ struct OutputRequest {
     /// or the frame, and take seconds to build. Null: built for this call
     /// only; else filled by the first call and reused by the next.
     std::shared_ptr<std::vector<ExpectedCurve>> curves_cache;
+    /// `timing=` (ADX only; off: the standard encoding; grey: printer
+    /// lights that put the stock's 18% grey on CDD 0.70, MODEL.md 11).
+    AdxTiming timing = AdxTiming::off;
+    /// ADX's transform, shared by the frames of one run as curves_cache
+    /// (it depends on the stock, the shutter and the timing). Null: built
+    /// for this call only; else filled by the first call and reused.
+    std::shared_ptr<std::optional<AdxTransform>> adx_cache;
 };
 
 /// What apply_output did.
 struct OutputReport {
     /// The colour space the output is in ("" for density).
     std::string colorspace;
-    /// ADX: per layer D-min used; regrain: unused.
-    std::vector<double> d_min;
+    /// ADX: the transform applied (D-min, map, gains, timing); regrain:
+    /// unset.
+    std::optional<AdxTransform> adx;
     /// ADX: code values clamped to the range (non-finite densities too).
     uint64_t clamped_values = 0;
     /// Messages for the user (warnings), already worded.
@@ -148,7 +122,13 @@ struct OutputReport {
 /// Metadata added to out: filmgrain:output (the kind's name),
 /// filmgrain:quantity (what the values mean), and for adx / regrain
 /// filmgrain:colorspace and oiio:ColorSpace (the config's ADX10 / ADX16,
-/// or --ocolorspace resolved), for adx filmgrain:adx_dmin (per channel).
+/// or --ocolorspace resolved); for adx (MODEL.md 11)
+/// filmgrain:printing_density ("annex_c": the stock's Status M -> APD map;
+/// "status_m (no map)": APD = Status M), filmgrain:adx_dmin (Status M D-min
+/// per channel, "R x, G y, B z"), filmgrain:apd_dmin (the same in APD),
+/// filmgrain:adx_gains (k) and filmgrain:adx_timing ("off", or "grey: R t,
+/// G t, B t", the CDD added per channel). timing=grey with any other output
+/// is an error.
 /// Errors name the offending value (stock layers, colour space, sizes).
 Status apply_output(const OutputRequest& request, const FilmgrainOptions& opts,
                     const OIIO::ImageBuf& scene_linear_input, const OIIO::ImageBuf& density,

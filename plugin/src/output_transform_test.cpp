@@ -18,59 +18,6 @@
 namespace filmgrain::cli {
 namespace {
 
-TEST(OutputTransform, AdxLayers)
-{
-    std::array<int, 3> l {};
-    ASSERT_TRUE(adx_layers({ "R", "G", "B" }, l));
-    EXPECT_EQ(l, (std::array<int, 3> { 0, 1, 2 }));
-    ASSERT_TRUE(adx_layers({ "B", "x", "G", "R" }, l));
-    EXPECT_EQ(l, (std::array<int, 3> { 3, 2, 0 }));
-    ASSERT_TRUE(adx_layers({ "Y" }, l));
-    EXPECT_EQ(l, (std::array<int, 3> { 0, 0, 0 })) << "one layer: silver is neutral, R = G = B";
-    const Status s = adx_layers({ "R", "G" }, l);
-    ASSERT_FALSE(s);
-    EXPECT_NE(s.message().find("the stock's layers are R, G (no layer B)"), std::string::npos)
-        << s.message();
-}
-
-TEST(OutputTransform, AdxCodeValuesAreExact)
-{
-    // Layers stored B, G, R; D-min 0.3, 0.4, 0.5 (per layer, stock order).
-    const std::vector<double> d_min = { 0.3, 0.4, 0.5 };
-    const float nan                 = std::numeric_limits<float>::quiet_NaN();
-    const float d[]                 = {
-        0.3f, 0.4f, 0.5f,            // every layer at its D-min
-        0.8f, 1.4f, 0.5f + 0.002f,   // B +0.5, G +1.0, R +0.002
-        0.3f + 3.0f, 0.4f - 0.5f, nan,  // B beyond ADX10's top, G below 0, R NaN
-    };
-    std::array<int, 3> layers {};
-    ASSERT_TRUE(adx_layers({ "B", "G", "R" }, layers));
-    float rgb[9];
-    const AdxEncoding a10 = adx_encoding(OutputKind::adx10);
-    EXPECT_STREQ(a10.colorspace, "ADX10");
-    EXPECT_EQ(encode_adx(d, 3, 3, layers, d_min, a10, rgb), 3u);
-    // ADX10 = 95 + 500 D, rounded, / 1023.
-    EXPECT_FLOAT_EQ(rgb[0], 95.0f / 1023.0f);
-    EXPECT_FLOAT_EQ(rgb[1], 95.0f / 1023.0f);
-    EXPECT_FLOAT_EQ(rgb[2], 95.0f / 1023.0f);
-    EXPECT_FLOAT_EQ(rgb[3], 96.0f / 1023.0f);   // R: 95 + 500 * 0.002 = 96
-    EXPECT_FLOAT_EQ(rgb[4], 595.0f / 1023.0f);  // G: 95 + 500
-    EXPECT_FLOAT_EQ(rgb[5], 345.0f / 1023.0f);  // B: 95 + 250
-    EXPECT_EQ(rgb[6], 0.0f);                    // NaN: 0, counted
-    EXPECT_EQ(rgb[7], 0.0f);                    // 95 - 250 < 0: clamped
-    EXPECT_EQ(rgb[8], 1.0f);                    // 95 + 1500 > 1023: clamped
-    const AdxEncoding a16 = adx_encoding(OutputKind::adx16);
-    EXPECT_STREQ(a16.colorspace, "ADX16");
-    EXPECT_EQ(encode_adx(d, 3, 3, layers, d_min, a16, rgb), 2u);
-    // ADX16 = 1520 + 8000 D, rounded, / 65535.
-    EXPECT_FLOAT_EQ(rgb[0], 1520.0f / 65535.0f);
-    EXPECT_FLOAT_EQ(rgb[3], 1536.0f / 65535.0f);  // 1520 + 16
-    EXPECT_FLOAT_EQ(rgb[4], 9520.0f / 65535.0f);
-    EXPECT_FLOAT_EQ(rgb[5], 5520.0f / 65535.0f);
-    EXPECT_FLOAT_EQ(rgb[8], 25520.0f / 65535.0f);  // 3.0 fits in 16 bits
-    EXPECT_EQ(rgb[7], 0.0f);                       // 1520 - 4000 < 0: clamped
-}
-
 /// A density image as the operator makes it: layers R, G, B, full window
 /// the scan.
 OIIO::ImageBuf density_image(int w, int h, const float* values)
@@ -85,7 +32,10 @@ OIIO::ImageBuf density_image(int w, int h, const float* values)
 
 TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
 {
-    const FilmgrainOptions opts;  // the default colour negative, layers R, G, B
+    // The default stock, vision3-500t: layers R, G, B with 5219's Annex C
+    // map (MODEL.md 11).
+    const FilmgrainOptions opts;
+    ASSERT_TRUE(opts.stock.status_m_to_apd);
     std::vector<ExpectedCurve> fog;
     ExpectedCurveOptions o;
     o.fog_only = true;
@@ -93,7 +43,11 @@ TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
     ASSERT_EQ(fog.size(), 3u);
     for (const ExpectedCurve& c : fog)
         EXPECT_GT(c.min_density(), opts.stock.base_density) << "D-min is base plus fog";
-    // Each channel's code values count from its own layer's D-min.
+    // Pixel 0: StM D-min + (1, 0, 0.5). CDD = k M (1, 0, 0.5), by hand:
+    //   R = 1.100481 - 0.000160 * 0.5            = 1.100401  -> 1520 + 8803.208 = 10323
+    //   G = 0.92 (-0.005245 + 0.009767 * 0.5)    = -0.00033258 -> 1520 - 2.661  = 1517
+    //   B = 0.95 (-0.008288 + 0.957600 * 0.5)    = 0.4469864 -> 1520 + 3575.891 = 5096
+    // (float densities move a code value by < 1e-3: far from a rounding tie).
     const float d[] = { static_cast<float>(fog[0].min_density() + 1.0),
                         static_cast<float>(fog[1].min_density()),
                         static_cast<float>(fog[2].min_density() + 0.5), 9.0f, 0.0f, 0.0f };
@@ -106,26 +60,64 @@ TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
     ASSERT_TRUE(s) << s.message();
     ASSERT_EQ(out.spec().nchannels, 3);
     EXPECT_EQ(out.spec().channelnames, (std::vector<std::string> { "R", "G", "B" }));
-    EXPECT_EQ(out.spec().get_string_attribute("filmgrain:output"), "adx16");
-    EXPECT_EQ(out.spec().get_string_attribute("filmgrain:colorspace"), "ADX16");
-    EXPECT_EQ(out.spec().get_string_attribute("oiio:ColorSpace"), "ADX16");
-    EXPECT_NE(out.spec().get_string_attribute("filmgrain:quantity").find("ADX16 code value"),
+    const OIIO::ImageSpec& spec = out.spec();
+    EXPECT_EQ(spec.get_string_attribute("filmgrain:output"), "adx16");
+    EXPECT_EQ(spec.get_string_attribute("filmgrain:colorspace"), "ADX16");
+    EXPECT_EQ(spec.get_string_attribute("oiio:ColorSpace"), "ADX16");
+    EXPECT_NE(spec.get_string_attribute("filmgrain:quantity").find("ADX16 code value"),
               std::string::npos);
-    EXPECT_FALSE(out.spec().get_string_attribute("filmgrain:adx_dmin").empty());
+    EXPECT_EQ(spec.get_string_attribute("filmgrain:printing_density"), "annex_c");
+    EXPECT_EQ(spec.get_string_attribute("filmgrain:adx_gains"), "R 1, G 0.92, B 0.95");
+    EXPECT_EQ(spec.get_string_attribute("filmgrain:adx_timing"), "off");
+    EXPECT_FALSE(spec.get_string_attribute("filmgrain:adx_dmin").empty());
+    EXPECT_FALSE(spec.get_string_attribute("filmgrain:apd_dmin").empty());
     float px[3];
     out.getpixel(0, 0, px);
-    // Each of the pixels' densities is a float: the code value is within
-    // 8000 x (float rounding of ~1.3) = 1e-3 of 1520 + 8000 (D - D-min),
-    // which rounds to the stated integer.
-    EXPECT_FLOAT_EQ(px[0], 9520.0f / 65535.0f);
-    EXPECT_FLOAT_EQ(px[1], 1520.0f / 65535.0f);
-    EXPECT_FLOAT_EQ(px[2], 5520.0f / 65535.0f);
-    // Pixel 1: R = 9 is beyond 65535, G and B = 0 below 0: three clamped.
+    EXPECT_FLOAT_EQ(px[0], 10323.0f / 65535.0f);
+    EXPECT_FLOAT_EQ(px[1], 1517.0f / 65535.0f);
+    EXPECT_FLOAT_EQ(px[2], 5096.0f / 65535.0f);
+    // Pixel 1: R = 9 is beyond 65535, G and B (mixed by the map from R's
+    // 9 and their own 0) below 0: three clamped.
     EXPECT_EQ(report.clamped_values, 3u);
     ASSERT_EQ(report.warnings.size(), 1u);
     EXPECT_NE(report.warnings[0].find("3 of the 6 ADX16 code values"), std::string::npos)
         << report.warnings[0];
+    ASSERT_TRUE(report.adx);
+    EXPECT_EQ(report.adx->timing, AdxTiming::off);
 
+    // timing=grey: the stock's 18% grey card (its expected densities)
+    // encodes as 7120 in every channel, D-min as 1520 + 8000 t.
+    req.timing = AdxTiming::grey;
+    ASSERT_TRUE(apply_output(req, opts, OIIO::ImageBuf(), density, out, report));
+    ASSERT_TRUE(report.adx);
+    const AdxTransform& t = *report.adx;
+    const std::string timing = out.spec().get_string_attribute("filmgrain:adx_timing");
+    EXPECT_EQ(timing.rfind("grey: R ", 0), 0u) << timing;
+    const float g[] = { static_cast<float>(t.status_m_grey[0]),
+                        static_cast<float>(t.status_m_grey[1]),
+                        static_cast<float>(t.status_m_grey[2]),
+                        static_cast<float>(fog[0].min_density()),
+                        static_cast<float>(fog[1].min_density()),
+                        static_cast<float>(fog[2].min_density()) };
+    OIIO::ImageBuf timed;
+    ASSERT_TRUE(apply_output(req, opts, OIIO::ImageBuf(), density_image(2, 1, g), timed, report));
+    timed.getpixel(0, 0, px);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_FLOAT_EQ(px[c], 7120.0f / 65535.0f) << c;
+    timed.getpixel(1, 0, px);
+    for (size_t c = 0; c < 3; ++c)
+        EXPECT_FLOAT_EQ(px[c], static_cast<float>(std::round(1520.0 + 8000.0 * t.timing_cdd[c])
+                                                  / 65535.0))
+            << c;
+
+    // timing= with another output: refused, naming it.
+    OutputRequest dens_timed;
+    dens_timed.timing = AdxTiming::grey;
+    const Status v = apply_output(dens_timed, opts, OIIO::ImageBuf(), density, out, report);
+    ASSERT_FALSE(v);
+    EXPECT_NE(v.message().find("timing=grey applies to output=adx10 and adx16 only"),
+              std::string::npos)
+        << v.message();
     // Density: unchanged, tagged.
     OutputRequest dens;
     OIIO::ImageBuf same;
@@ -134,21 +126,30 @@ TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
     same.getpixel(0, 0, px);
     EXPECT_EQ(px[0], d[0]);
     // --ocolorspace with ADX: refused, naming it.
+    req.timing      = AdxTiming::off;
     req.ocolorspace = "ACEScg";
-    const Status t  = apply_output(req, opts, OIIO::ImageBuf(), density, out, report);
-    ASSERT_FALSE(t);
-    EXPECT_NE(t.message().find("--ocolorspace ACEScg applies to output=regrain only"),
+    const Status t2 = apply_output(req, opts, OIIO::ImageBuf(), density, out, report);
+    ASSERT_FALSE(t2);
+    EXPECT_NE(t2.message().find("--ocolorspace ACEScg applies to output=regrain only"),
               std::string::npos)
-        << t.message();
+        << t2.message();
     // A two-layer stock cannot be ADX.
     FilmgrainOptions two = opts;
     two.stock.layers.pop_back();
+    two.stock.status_m_to_apd.reset();
     req.ocolorspace.clear();
     const Status u = apply_output(req, two, OIIO::ImageBuf(), density, out, report);
     ASSERT_FALSE(u);
     EXPECT_NE(u.message().find("output=adx16: ADX needs the layers named R, G and B"),
               std::string::npos)
         << u.message();
+    // A stock without a map (the paper's colour negative): APD = Status M,
+    // said in the metadata; CDD = k (D - D-min).
+    FilmgrainOptions plain = opts;
+    ASSERT_TRUE(load_stock("color-negative", plain.stock));
+    ASSERT_TRUE(apply_output(req, plain, OIIO::ImageBuf(), density, out, report));
+    EXPECT_EQ(out.spec().get_string_attribute("filmgrain:printing_density"),
+              "status_m (no map)");
 }
 
 TEST(OutputTransform, Adx16GreyWedgeThroughOcioIsFiniteAndMonotonic)
@@ -164,10 +165,11 @@ TEST(OutputTransform, Adx16GreyWedgeThroughOcioIsFiniteAndMonotonic)
             d.push_back(static_cast<float>(d_min + x));
     const size_t n = d.size() / 3;
     std::vector<float> rgb(n * 3);
-    std::array<int, 3> layers {};
-    ASSERT_TRUE(adx_layers({ "R", "G", "B" }, layers));
-    EXPECT_EQ(encode_adx(d.data(), n, 3, layers, { d_min, d_min, d_min },
-                         adx_encoding(OutputKind::adx16), rgb.data()),
+    // No map, gains 1: the same CDD in R, G and B.
+    const AdxTransform neutral = make_adx_transform(nullptr, { 0, 1, 2 }, { d_min, d_min, d_min },
+                                                    { 1.0, 1.0, 1.0 }, nullptr);
+    EXPECT_EQ(encode_adx(neutral, adx_encoding(OutputKind::adx16), d.data(), n, 3, true,
+                         rgb.data()),
               0u);
     std::unique_ptr<ocio::Converter> conv;
     const Status s = ocio::Converter::create("", "ADX16", "ACES2065-1", conv);
@@ -190,8 +192,9 @@ TEST(OutputTransform, Adx16GreyWedgeThroughOcioIsFiniteAndMonotonic)
             EXPECT_GT(rgb[i * 3], rgb[(i - 1) * 3]) << "step " << i;
         }
     }
-    // A density of about 0.69 above D-min is the ADX transform's mid grey.
-    EXPECT_NEAR(rgb[88 * 3], 0.18, 0.03) << "D - D-min = 0.69";
+    // CDD 0.70 (ADX16 7120) is the ADX transform's mid grey, 0.18 (OCIO's
+    // ADX16_to_ACES2065-1 gives 0.1800000, within float rounding).
+    EXPECT_NEAR(rgb[89 * 3], 0.18, 1e-5) << "D - D-min = 0.70";
 }
 
 // --- Regrain ---------------------------------------------------------------

@@ -6,9 +6,7 @@
 #include <cmath>
 #include <memory>
 
-#include "filmgrain/expected_curve.h"
 #include "filmgrain/ocio.h"
-#include "output_transform.h"
 
 namespace filmgrain::cli {
 
@@ -77,7 +75,8 @@ Preview make_preview(const float* density, int64_t width, int64_t height,
 
 Status make_film_preview(const float* density, int64_t width, int64_t height,
                          const Stock& stock, const SceneSettings& scene,
-                         const std::string& colorconfig, Preview& out, std::string& warning)
+                         const std::string& colorconfig, Preview& out, std::string& warning,
+                         const std::shared_ptr<std::optional<AdxTransform>>& cache)
 {
     warning.clear();
     std::vector<std::string> names;
@@ -92,29 +91,47 @@ Status make_film_preview(const float* density, int64_t width, int64_t height,
         return Status();
     };
     std::array<int, 3> layers {};
-    if (Status s = adx_layers(names, layers); !s)
+    if (Status s = printing_density_layers(names, layers); !s)
         return fallback(s.message());
+    // ADX16 (finer code values; the preview passes them unrounded anyway),
+    // else ADX10.
+    AdxEncoding enc = kAdx16;
     std::string adx;
-    if (Status s = ocio::find_colorspace(colorconfig, "ADX10", adx); !s)
+    if (Status s = ocio::find_colorspace(colorconfig, enc.colorspace, adx); !s)
         return s;
+    if (adx.empty()) {
+        enc = kAdx10;
+        if (Status s = ocio::find_colorspace(colorconfig, enc.colorspace, adx); !s)
+            return s;
+    }
     if (adx.empty())
-        return fallback("the OCIO config has no ADX10 colour space");
+        return fallback("the OCIO config has no ADX16 or ADX10 colour space");
     std::unique_ptr<ocio::Converter> conv;
     if (Status s = ocio::Converter::create_display_view(colorconfig, adx, "", "", conv); !s)
         return Status::errorf("preview: ", s.message());
-    ExpectedCurveOptions o;
-    o.fog_only = true;
-    std::vector<ExpectedCurve> curves;
-    if (Status s = expected_curves(stock, scene, o, curves); !s)
-        return Status::errorf("preview: ", s.message());
-    std::vector<double> d_min;
-    for (const ExpectedCurve& c : curves)
-        d_min.push_back(c.min_density());
+
+    // The timed print (MODEL.md 11), once per run.
+    AdxTransform transform;
+    if (cache && cache->has_value()) {
+        transform = **cache;
+    } else {
+        AdxOptions o;
+        o.timing            = AdxTiming::grey;
+        o.neutral_one_layer = true;
+        if (Status s = stock_adx_transform(stock, scene, o, transform); !s) {
+            o.timing = AdxTiming::off;
+            if (Status u = stock_adx_transform(stock, scene, o, transform); !u)
+                return Status::errorf("preview: ", u.message());
+            warning = "preview: not timed (" + s.message()
+                      + "): the ADX encoding as it is, whose grey need not be neutral";
+        }
+        if (cache)
+            *cache = transform;
+    }
 
     const size_t npix = static_cast<size_t>(width) * static_cast<size_t>(height);
     std::vector<float> rgb(npix * 3);
-    encode_adx(density, npix, static_cast<int>(names.size()), layers, d_min,
-               adx_encoding(OutputKind::adx10), rgb.data());
+    encode_adx(transform, enc, density, npix, static_cast<int>(names.size()), false, rgb.data());
     conv->apply_rgb(rgb.data(), npix);
     out          = Preview();
     out.width    = width;

@@ -3,9 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "filmgrain/printing_density.h"
 #include "filmgrain/render.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
@@ -44,19 +47,28 @@ Preview make_preview(const float* density, int64_t width, int64_t height,
                      const std::vector<std::string>& layer_names,
                      const std::vector<double>& base_densities);
 
-/// The preview through OCIO (--help "Preview"): each layer's density above
-/// its D-min (expected_curves, fog_only: base + fog) as ADX10 code values
-/// (encode_adx, channels R, G, B, or the one layer three times) -> the
-/// config's ADX10 colour space -> the config's default display and view
+/// The preview through OCIO (--help "Preview"), a timed print of the
+/// negative (MODEL.md 11): each layer's density -> ADX16 code values of the
+/// stock's printing densities, timed on the stock's own 18% grey
+/// (stock_adx_transform with AdxTiming::grey: grey lands on CDD 0.70, ACES
+/// 0.18, in every channel; a one-layer stock with gains 1, so that silver
+/// stays neutral), unrounded -> the config's ADX16 colour space (ADX10
+/// when it has no ADX16) -> the config's default display and view
 /// (embedded: sRGB, ACES 1.0 - SDR Video) -> round(255 clamp(x, 0, 1)).
 /// colorconfig: --colorconfig (empty: $OCIO, else the embedded config).
 /// Falls back to make_preview (a plain inversion) and says why in
-/// `warning` when the config has no ADX10 colour space or the stock's
-/// layers are not R, G, B (nor one layer); otherwise `warning` is empty.
+/// `warning` when the config has neither ADX colour space or the stock's
+/// layers are not R, G, B (nor one layer); to an untimed ADX preview, with
+/// a warning, when the stock's grey cannot be computed (a population with
+/// rate_area_exponent != 0 has no single expected curve); otherwise
+/// `warning` is empty.
+/// cache: null, or shared by the frames of one run (the transform depends
+/// on the stock and the shutter only): filled by the first call.
 /// Errors: the config cannot be loaded, a display transform fails.
 /// `density` holds width x height pixels of stock.layers.size() floats.
 Status make_film_preview(const float* density, int64_t width, int64_t height,
                          const Stock& stock, const SceneSettings& scene,
-                         const std::string& colorconfig, Preview& out, std::string& warning);
+                         const std::string& colorconfig, Preview& out, std::string& warning,
+                         const std::shared_ptr<std::optional<AdxTransform>>& cache = nullptr);
 
 }  // namespace filmgrain::cli

@@ -202,6 +202,7 @@ def render(
     seed=None,
     frame=None,
     static=None,
+    edge=None,
     width_mm=None,
     scan=None,
     roi=None,
@@ -209,6 +210,7 @@ def render(
     tolerance=None,
     tile=None,
     output=None,
+    timing=None,
     ocolorspace=None,
     colorconfig=None,
     threads=0,
@@ -247,6 +249,9 @@ def render(
             of frame N is frame_seed(seed, N), the same as the CLI's
             ``frame=N`` and ``--frames``. Default: a single image.
         static: with frame: True keeps one grain pattern on every frame.
+        edge: beyond the image (MODEL.md 2): "clamp" (the default: the
+            scene continues, each point exposed as the nearest edge pixel)
+            or "gate" (no light: a camera gate's hard edge).
         width_mm: width of the film frame, millimetres (float), (0, 1e9].
         scan: output size over the whole frame: (width, height), width
             (int: the frame's aspect) or "WxH". Default: the input's size.
@@ -262,7 +267,12 @@ def render(
             config's scene_linear whose local mean is the input and whose
             fluctuation is the film's grain; needs the scan at the input's
             size). The transforms' warnings (e.g. clamped ADX code values)
-            are Python UserWarnings.
+            are Python UserWarnings. ADX is the stock's Academy Printing
+            Density above D-min with ADX's gains (MODEL.md 11).
+        timing: output="adx10" / "adx16" only (as the CLI's ``timing=``):
+            "off" (the default: the standard encoding) or "grey" (printer
+            lights that put the stock's own 18% grey on CDD 0.70, ACES
+            0.18, in every channel).
         ocolorspace: output="regrain" only (as the CLI's --ocolorspace):
             the colour space of the positive, a name the colour config
             knows. Default: its scene_linear.
@@ -304,6 +314,7 @@ def render(
         seed=seed,
         frame=frame,
         static=static,
+        edge=edge,
         width_mm=width_mm,
         scan=scan,
         roi=roi,
@@ -311,6 +322,7 @@ def render(
         tolerance=tolerance,
         tile=tile,
         output=output,
+        timing=timing,
     )
     modifiers.update(expert)
     return _render(pixels, stock, modifiers, threads, progress, None,
@@ -369,8 +381,9 @@ def render_imagebuf(buf, *, stock=None, threads=0, progress=None, ocolorspace=No
     Python types is involved. buf must be scene-linear (convert first, e.g.
     with ``OpenImageIO.ImageBufAlgo.colorconvert``); its display window is
     the film frame and its data window is placed in it, as the C++
-    operator ``filmgrain::IBA::filmgrain`` does (pixels outside the data
-    window are black). Keywords as for :func:`render`.
+    operator ``filmgrain::IBA::filmgrain`` does (beyond the data window the
+    scene continues, or with ``edge="gate"`` there is no light); the
+    negative covers the data window. Keywords as for :func:`render`.
 
     Returns: (ImageBuf, stats): a float ImageBuf with one channel per stock
     layer, named after the layer, its display window the whole scan and its

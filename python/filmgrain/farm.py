@@ -66,7 +66,7 @@ SEQUENCE_SUMMARY_RE = re.compile(
     r"(\d+) missing input \(skipped\)")
 
 # The keys of each line of the CLI's --dry-run (filmgrain --help).
-DRY_RUN_KEYS = ("frame", "input", "output", "stats", "preview", "input_exists",
+DRY_RUN_KEYS = ("frame", "input", "output", "stats", "preview", "input_exists", "error",
                 "settings_hash", "up_to_date")
 
 HELP = f"""\
@@ -749,6 +749,14 @@ def main(argv=None):
                      "skipped (--skip-missing)")
         if len(jobs) == 1 and up_to_date:
             con.info(f"'{up_to_date[0]['output']}' is up to date (same settings): skipped")
+        # What the CLI would refuse from an input's header: said before any
+        # worker starts, as the CLI's own sequence run stops at it.
+        refused = [job for job in todo if job["error"]]
+        if refused:
+            job = refused[0]
+            where = f"frame {job['frame']}: " if sequence else ""
+            raise FarmError(f"{where}{job['error']}"
+                            + (f" ({len(refused)} frames refused)" if len(refused) > 1 else ""))
         if not todo:
             if sequence and a.tiles == 1:
                 con.info(f"sequence of {len(jobs)} frames: 0 rendered, {len(up_to_date)} up to "

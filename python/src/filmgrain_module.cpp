@@ -236,6 +236,7 @@ py::tuple render(py::array pixels, const std::string& modifiers,
             request.kind        = cmd.output;
             request.colorconfig = colorconfig.value_or("");
             request.ocolorspace = ocolorspace.value_or("");
+            request.timing      = cmd.timing;
             s = cli::apply_output(request, opts, src, dst, result, output_report);
         }
         if (!s)

@@ -69,9 +69,11 @@ def test_two_channels_is_the_operators_error(fg_bin, tmp_path):
     two = np.ascontiguousarray(PIXELS[:, :, :2])
     mod = module_message(pixels=two)
     assert mod == "source image has 2 channels: expected 1 (grey) or at least 3 (R, G, B first)"
-    # The CLI says the same of its INPUT file.
+    # The CLI takes its INPUT's channels by name: it says which it lacks
+    # and what the file has.
     assert cli_message(fg_bin, tmp_path, {}, pixels=two).endswith(
-        "has 2 channels: expected 1 (grey) or at least 3 (R, G, B first)")
+        "has no channels R, G, B or Y (part 0 has R,G): choose them with --ch, --subimage "
+        "or --view")
 
 
 def test_bad_stock_dict_names_the_key():

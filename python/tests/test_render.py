@@ -40,6 +40,10 @@ CASES = {
         {"seed": 8, "width_mm": FAST_WIDTH_MM, "output": "adx16"},
         {"seed": 8, "width_mm": FAST_WIDTH_MM, "output": "adx16"},
     ),
+    "output-adx16-timed": (
+        {"seed": 8, "width_mm": FAST_WIDTH_MM, "output": "adx16", "timing": "grey"},
+        {"seed": 8, "width_mm": FAST_WIDTH_MM, "output": "adx16", "timing": "grey"},
+    ),
     "output-regrain": (
         {"stock": "paper", "seed": 8, "width_mm": FAST_WIDTH_MM, "output": "regrain"},
         {"stock": "paper", "seed": 8, "width_mm": FAST_WIDTH_MM, "output": "regrain"},

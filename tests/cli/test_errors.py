@@ -40,7 +40,7 @@ CASES = [
                                      fmt="uint8"))],
      FAST, ["cannot read", "t.png"]),
     ("two_channels", lambda d: [write_image(d / "two.exr", rgb_ramp()[:, :, :2])], FAST,
-     ["2 channels", "expected 1"]),
+     ["has no channels R, G, B or Y", "part 0 has R,G", "--ch"]),
     ("unknown_iscolorspace", lambda d: [ramp(d), "--iscolorspace", "NoSuchSpace"], FAST,
      ["NoSuchSpace", "unknown colour space"]),
     ("file_declares_unknown_colorspace",

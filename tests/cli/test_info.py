@@ -5,11 +5,12 @@ import re
 
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
-MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "width_mm", "scan", "roi",
+MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "edge", "width_mm", "scan", "roi",
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
-             "tile", "output"]
+             "tile", "output", "timing"]
 
-OPTIONS = ["--wedge", "--colorconfig", "--iscolorspace", "--ocolorspace", "--filmgrain", "-d", "-o",
+OPTIONS = ["--wedge", "--chart", "--subimage", "--view", "--ch", "--colorconfig", "--iscolorspace",
+           "--ocolorspace", "--filmgrain", "-d", "-o",
            "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
            "--list-stocks", "--print-stock", "--version", "--help"]
 

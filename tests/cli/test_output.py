@@ -1,6 +1,8 @@
 """--filmgrain:output=: ADX code values and the regrain positive, end to end
 through the CLI (the transforms' own tests: plugin/src/output_transform_test.cpp)."""
 
+import json
+
 import numpy as np
 
 from conftest import FAST, Exr, read_json, write_image
@@ -11,13 +13,17 @@ def layers(exr, names=("R", "G", "B")):
 
 
 def test_adx_is_the_density_above_dmin_in_code_values(run, tmp_path):
-    """The same render as density and as ADX10/ADX16: code value = offset +
-    scale (D - D-min), stored / max code, D-min per layer in the metadata."""
+    """The same render as density and as ADX10/ADX16 (MODEL.md 11): code value
+    = offset + scale k (M (D - D-min)), stored / max code; M the stock's
+    Annex C map (vision3-500t: 5219's), k ADX's gains, D-min per layer
+    (Status M), all in the metadata."""
     plate = write_image(tmp_path / "plate.exr",
                         np.full((24, 32, 3), 0.18, np.float32) * np.linspace(0.05, 8, 32)[None, :, None])
     base = f"--filmgrain:{FAST}:seed=5"
     assert run(plate, base, "-o", tmp_path / "d.exr").returncode == 0
-    density = layers(Exr(tmp_path / "d.exr"))
+    density = layers(Exr(tmp_path / "d.exr")).astype(np.float64)
+    stock = json.loads(run("--print-stock", "vision3-500t").stdout)
+    m = np.array(stock["printing_density"]["status_m_to_apd"]["matrix"])
     for kind, offset, scale, top in (("adx10", 95, 500, 1023), ("adx16", 1520, 8000, 65535)):
         out = tmp_path / f"{kind}.exr"
         r = run(plate, f"{base}:output={kind}", "-o", out, "--stats", tmp_path / f"{kind}.json")
@@ -25,10 +31,19 @@ def test_adx_is_the_density_above_dmin_in_code_values(run, tmp_path):
         exr = Exr(out)
         assert exr.attr("filmgrain:output") == kind
         assert exr.attr("filmgrain:colorspace") == kind.upper()
+        assert exr.attr("filmgrain:printing_density") == "annex_c"
+        assert exr.attr("filmgrain:adx_timing") == "off"
         assert read_json(tmp_path / f"{kind}.json")["output"] == kind
-        dmin = dict(part.split() for part in exr.attr("filmgrain:adx_dmin").split(", "))
-        dmin = np.array([float(dmin[c]) for c in "RGB"])
-        expect = np.clip(np.round(offset + scale * (density - dmin)), 0, top) / top
+        def rgb(attr):
+            parts = dict(part.split() for part in exr.attr(attr).split(", "))
+            return np.array([float(parts[c]) for c in "RGB"])
+        dmin, k = rgb("filmgrain:adx_dmin"), rgb("filmgrain:adx_gains")
+        assert k.tolist() == [1.0, 0.92, 0.95]
+        # APD D-min is the map applied to the Status M one.
+        offset_apd = np.array(stock["printing_density"]["status_m_to_apd"]["offset"])
+        assert np.allclose(rgb("filmgrain:apd_dmin"), m @ dmin + offset_apd, atol=2e-6)
+        cdd = k * ((density - dmin) @ m.T)
+        expect = np.clip(np.round(offset + scale * cdd), 0, top) / top
         # dmin is printed to 6 digits: a code value may round the other way.
         assert np.abs(layers(exr) - expect).max() <= 1.0 / top + 1e-7
         assert np.mean(layers(exr) == expect.astype(np.float32)) > 0.95

@@ -135,3 +135,32 @@ def test_roi_and_tiles_are_crops_of_the_whole_render(run, dirs):
     assert (part.spec.x, part.spec.y, part.spec.width, part.spec.height) == roi
     for n in whole.names:
         assert np.array_equal(part.channels[n], whole.channels[n][0:9, 0:13])
+
+
+def test_beyond_the_data_window_the_scene_continues(run, dirs):
+    """A uniform 40x30 data window inside a 64x48 display window, rendered
+    over the whole display window: with the scene continued (edge=clamp, the
+    default) the film beyond the data window is exposed as its edge, so it
+    reads the inside's density (within 0.02 D: both means are over
+    hundreds of pixels of a pixel-scale layer whose pixel spread is ~0.05
+    D); with edge=gate it is unexposed, fog only (far lighter)."""
+    indir, outdir = dirs
+    display, data = (0, 0, 64, 48), (12, 9, 40, 30)
+    write_windowed(indir / "crop.exr", data, display, value=0.18)
+    inside = np.zeros((48, 64), bool)
+    inside[9:39, 12:52] = True
+    means = {}
+    for edge in ("clamp", "gate"):
+        out = outdir / f"{edge}.exr"
+        r = run(indir / "crop.exr", f"--filmgrain:{FAST}:edge={edge}:roi=0,0,64,48", "-o", out)
+        assert r.returncode == 0, r.stderr
+        e = Exr(out)
+        assert e.attr("filmgrain:edge") == edge
+        for n in e.names:
+            c = e.channels[n]
+            means[edge, n] = (float(c[inside].mean()), float(c[~inside].mean()))
+    for n in ("R", "G", "B"):
+        inner, outer = means["clamp", n]
+        assert abs(outer - inner) < 0.02, (n, inner, outer)
+        inner, outer = means["gate", n]
+        assert outer < inner - 0.2, (n, inner, outer)

@@ -35,19 +35,20 @@ SCENES = {
     "wedge_one_layer": {
         "input": None,
         "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
-                 ":width_mm=2:scan=168x16:seed=1:engine=exact"],
+                 ":width_mm=2:scan=168x16:seed=1:engine=exact:edge=gate"],
     },
     # A 40x30 RGB gradient through three layers (one with two populations).
     "gradient_three_layer": {
         "input": (40, 30),
-        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=exact"],
+        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=exact"
+                 ":edge=gate"],
     },
     # A scan of another size than the input: 32x24 in, 48x36 out (ratio 1.5,
     # so scan pixels straddle input pixels).
     "scan_resample": {
         "input": (32, 24),
         "args": ["--filmgrain:stock={stocks}/one_layer.json:width_mm=1:scan=48:seed=3"
-                 ":engine=exact"],
+                 ":engine=exact:edge=gate"],
     },
     # The default engine (auto: on frames this small the early-stopped
     # chain, exact coverage) and the fast one with its table forced
@@ -58,17 +59,30 @@ SCENES = {
     "wedge_one_layer_auto": {
         "input": None,
         "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
-                 ":width_mm=2:scan=168x16:seed=1:engine=auto"],
+                 ":width_mm=2:scan=168x16:seed=1:engine=auto:edge=gate"],
     },
     "gradient_three_layer_kernel": {
         "input": (40, 30),
         "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=fast"
-                 ":kinetics=curve"],
+                 ":kinetics=curve:edge=gate"],
     },
     "gradient_three_layer_fast": {
         "input": (40, 30),
         "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=fast"
-                 ":kinetics=table"],
+                 ":kinetics=table:edge=gate"],
+    },
+    # The scenes above keep edge=gate (no light beyond the frame, the rule
+    # before MODEL.md 2 continued the scene): their references are those
+    # of that rule. The same two main scenes with the scene continued
+    # (edge=clamp, the default), references made with it.
+    "wedge_one_layer_clamp": {
+        "input": None,
+        "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
+                 ":width_mm=2:scan=168x16:seed=1:engine=exact"],
+    },
+    "gradient_three_layer_clamp": {
+        "input": (40, 30),
+        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=exact"],
     },
 }
 

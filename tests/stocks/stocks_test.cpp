@@ -115,6 +115,53 @@ TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
 // neighbouring points (one chain table, so no independent noise between
 // them) no drop beyond 1e-4 density, at every shutter of the datasheets'
 // reciprocity tables.
+TEST(BuiltInStocks, CarryTheirDatasheetsPrintingDensityMaps)
+{
+    // MODEL.md 11: a stock fitted to a datasheet that publishes an Annex C
+    // Status M -> APD map (S-2008-002) carries it exactly; no-remjet is
+    // 500T's emulsion (tools/look/make_no_remjet.py), so 5219's map. The
+    // black and white sheets and the paper's stocks have none.
+    const std::pair<const char*, const char*> fitted[] = {
+        { "vision3-500t", "kodak-vision3-500t-5219.json" },
+        { "no-remjet", "kodak-vision3-500t-5219.json" },
+        { "vision3-250d", "kodak-vision3-250d-5207.json" },
+        { "tri-x-400", "kodak-tri-x-400.json" },
+        { "t-max-100", "kodak-t-max-100.json" },
+    };
+    for (const auto& [preset, sheet_file] : fitted) {
+        Stock stock;
+        ASSERT_TRUE(load_stock(preset, stock));
+        const sm::Datasheet sheet = datasheet(sheet_file);
+        ASSERT_EQ(stock.status_m_to_apd.has_value(), sheet.printing_density.has_value())
+            << preset;
+        if (!sheet.printing_density)
+            continue;
+        EXPECT_EQ(stock.status_m_to_apd->matrix, sheet.printing_density->matrix) << preset;
+        EXPECT_EQ(stock.status_m_to_apd->offset, sheet.printing_density->offset) << preset;
+    }
+    // The colour sheets do publish one (5219's first entry, by hand).
+    const sm::Datasheet d5219 = datasheet("kodak-vision3-500t-5219.json");
+    ASSERT_TRUE(d5219.printing_density);
+    EXPECT_EQ(d5219.printing_density->matrix[0][0], 1.100481);
+    EXPECT_EQ(d5219.printing_density->offset[2], 0.010549);
+    for (const char* preset : { "color-negative", "paper" }) {
+        Stock stock;
+        ASSERT_TRUE(load_stock(preset, stock));
+        EXPECT_FALSE(stock.status_m_to_apd) << preset;
+    }
+    // A datasheet's map is read by the stock's rules: errors name the key.
+    sm::Datasheet bad;
+    const Status s = sm::parse_datasheet_json(
+        R"({"name": "x", "kind": "colour-negative", "printing_density": {"status_m_to_apd":
+            {"matrix": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "offset": [0, 0]}}})",
+        "x.json", bad);
+    ASSERT_FALSE(s);
+    EXPECT_NE(s.message().find("printing_density.status_m_to_apd.offset must be an array of 3 "
+                               "numbers"),
+              std::string::npos)
+        << s.message();
+}
+
 TEST(BuiltInStocks, CharacteristicCurvesRiseWithExposure)
 {
     for (const std::string& name : preset_names()) {

@@ -569,6 +569,9 @@ Status initial_stock(const sm::Datasheet& sheet, const FitOptions& options, Stoc
     s.fog_tau_s            = options.fog_tau_s;
     s.base_density         = 0.0;
     s.max_density          = 4.0;
+    // MODEL.md 11: the datasheet's Status M -> APD map, as published (no
+    // figure is fitted with it: it only says how the densities print).
+    s.status_m_to_apd      = sheet.printing_density;
     s.layers.clear();
     for (const sm::LayerTargets& t : sheet.layers) {
         Layer l;
@@ -891,6 +894,9 @@ Stock layer_alone(const Stock& stock, size_t layer)
 {
     Stock one  = stock;
     one.layers = { stock.layers[layer] };
+    // The Status M -> APD map reads the layers R, G and B together
+    // (MODEL.md 11): a layer alone has none (and no figure uses it).
+    one.status_m_to_apd.reset();
     if (stock.inhibits())
         one.inhibition = { { stock.inhibition[layer][layer] } };
     return one;

@@ -274,7 +274,8 @@ bool layer_develops_alone(const Stock& stock, size_t layer);
 /// The stock reduced to layer `layer` (and its own inhibition): rendered,
 /// its one layer is that layer of `stock`, bit for bit for layer 0 (grains
 /// are numbered per layer index) and in distribution for any other, when
-/// layer_develops_alone(stock, layer).
+/// layer_develops_alone(stock, layer). Without the stock's Status M -> APD
+/// map (it needs the layers R, G and B).
 Stock layer_alone(const Stock& stock, size_t layer);
 
 /// Renders the patches that check `figures` (from measure()) on `stock`:

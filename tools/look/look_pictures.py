@@ -17,8 +17,19 @@ scatter, inhibitors and dye clouds, MODEL.md 8-10) and with `no-remjet`
                                 density; at VISION3's sub-micron scale no
                                 single grain or cloud is visible in a
                                 6.25 um pixel)
+  docs/look/preview_before_after.png
+                                the wedge and the chart of the default stock
+                                (vision3-500t), three ways (MODEL.md 11,
+                                issue 40): the preview before printing
+                                density (Status M above D-min as ADX10, no
+                                gains: teal), output=adx16 as ACES reads it
+                                (5219's Annex C map and ADX's gains, untimed),
+                                and the preview now (the same, timed on the
+                                stock's grey); each through the config's sRGB
+                                / ACES 1.0 SDR view
 and prints each render's time. Usage (from the repository root, after
 scripts/build):  tools/look/look_pictures.py [--filmgrain build/plugin/filmgrain]
+[--only preview_before_after]
 """
 import argparse
 import json
@@ -53,12 +64,127 @@ def render(filmgrain, stock, out_dir, name, preview=True):
     return oiio.ImageBuf(exr).get_pixels(oiio.FLOAT)
 
 
+# The embedded OCIO config's source ($OCIO when set, as the CLI).
+CONFIG = os.environ.get("OCIO") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+    "ocio", "src", "filmgrain_minimal.ocio")
+DISPLAY, VIEW = "sRGB", "ACES 1.0 - SDR Video"
+
+
+def rgb_attr(exr, name):
+    """'R a, G b, B c' metadata -> numpy (a, b, c)."""
+    parts = dict(p.split() for p in exr.spec().get_string_attribute(name).split(", "))
+    return np.array([float(parts[c]) for c in "RGB"])
+
+
+def adx_view(code, colorspace):
+    """ADX code values / max code (h, w, 3) -> 8-bit through the config's view."""
+    buf = oiio.ImageBuf(np.ascontiguousarray(code.astype(np.float32)))
+    out = oiio.ImageBufAlgo.ociodisplay(buf, DISPLAY, VIEW, colorspace, colorconfig=CONFIG)
+    assert not out.has_error, out.geterror()
+    return np.round(255.0 * np.clip(out.get_pixels(oiio.FLOAT), 0.0, 1.0)).astype(np.uint8)
+
+
+def preview_before_after(filmgrain, out_dir, tmp, stock="vision3-500t"):
+    """docs/look/preview_before_after.png and the numbers docs/look/README.md
+    quotes: per-channel spreads (8-bit) of the wedge's steps and the chart's
+    greys, before and after."""
+    spec = json.loads(subprocess.run([filmgrain, "--print-stock", stock], check=True,
+                                     capture_output=True, text=True).stdout)
+    m = np.array(spec["printing_density"]["status_m_to_apd"]["matrix"])
+    # D-min (Status M) and ADX's gains as the CLI states them: a tiny
+    # output=adx16 render (they depend on the stock and shutter only).
+    plate = os.path.join(tmp, "plate.exr")
+    oiio.ImageBuf(np.full((4, 4, 3), 0.18, np.float32)).write(plate)
+    probe = os.path.join(tmp, "probe.exr")
+    subprocess.run([filmgrain, plate, f"--filmgrain:stock={stock}:width_mm=0.1:output=adx16",
+                    "-o", probe, "-q"], check=True)
+    probe = oiio.ImageBuf(probe)
+    dmin, k = rgb_attr(probe, "filmgrain:adx_dmin"), rgb_attr(probe, "filmgrain:adx_gains")
+    rows = []
+    for scene in ("wedge", "chart"):
+        exr, png = os.path.join(tmp, scene + ".exr"), os.path.join(tmp, scene + ".png")
+        cmd = [filmgrain, "--" + scene, f"--filmgrain:stock={stock}", "-o", exr,
+               "--preview", png, "-q"]
+        t = time.monotonic()
+        subprocess.run(cmd, check=True)
+        print(f"{scene}: {time.monotonic() - t:.1f} s  ({' '.join(cmd)})")
+        e = oiio.ImageBuf(exr)
+        names = e.spec().channelnames
+        d = e.get_pixels(oiio.FLOAT)[..., [names.index(c) for c in "RGB"]].astype(np.float64)
+        # Before: each layer's Status M density above its D-min as ADX10
+        # (95 + 500 D, rounded), no map, no gains, untimed: the old preview.
+        before = adx_view(np.clip(np.round(95.0 + 500.0 * (d - dmin)), 0, 1023) / 1023.0,
+                          "ADX10")
+        # output=adx16 as a comp reads it: k M (D - D-min), untimed.
+        cdd = k * ((d - dmin) @ m.T)
+        untimed = adx_view(np.clip(np.round(1520.0 + 8000.0 * cdd), 0, 65535) / 65535.0,
+                           "ADX16")
+        after = oiio.ImageBuf(png).get_pixels(oiio.UINT8)
+        rows.append((scene, before, untimed, after))
+
+    def spread(img, x0, x1, y0, y1):
+        mean = img[y0:y1, x0:x1].reshape(-1, 3).astype(np.float64).mean(axis=0)
+        return mean, float(np.ptp(mean))
+
+    for scene, *imgs in rows:
+        labels = ("before", "adx16 untimed", "after (preview)")
+        if scene == "wedge":
+            for i in range(21):
+                stops = -8.0 + 0.75 * i
+                if -4.25 <= stops <= 4.0:
+                    print(f"wedge step {stops:+.2f} stops: " + "; ".join(
+                        f"{lab} {' '.join(f'{v:.1f}' for v in spread(img, i * 48, (i + 1) * 48, 0, 96)[0])}"
+                        f" (spread {spread(img, i * 48, (i + 1) * 48, 0, 96)[1]:.1f})"
+                        for lab, img in zip(labels, imgs)))
+        else:
+            regions = [("grey rectangle", 576 + 32, 960 - 32, 192 + 32, 576 - 32)]
+            for col, name in enumerate(("white 9.5", "neutral 8", "neutral 6.5", "neutral 5",
+                                        "neutral 3.5", "black 2")):
+                x0, y0 = 1044 + 80 * col, 228 + 3 * 80
+                regions.append((name, x0 + 8, x0 + 64, y0 + 8, y0 + 64))
+            for name, x0, x1, y0, y1 in regions:
+                print(f"chart {name}: " + "; ".join(
+                    f"{lab} {' '.join(f'{v:.1f}' for v in spread(img, x0, x1, y0, y1)[0])}"
+                    f" (spread {spread(img, x0, x1, y0, y1)[1]:.1f})"
+                    for lab, img in zip(labels, imgs)))
+
+    # Each column 768 pixels wide: the chart at half size, the wedge scaled
+    # to the same width.
+    fig, axes = plt.subplots(2, 3, figsize=(23.8, 5.6), dpi=100,
+                             gridspec_kw={"height_ratios": [96 * 768 / 1008, 384]})
+    titles = ("before: Status M above D-min as ADX10\n(no map, no gains, untimed)",
+              "output=adx16 as ACES reads it\n(5219's Annex C map, ADX gains, untimed)",
+              "after: the preview, a timed print\n(the same, timed on the stock's 18% grey)")
+    for r, (scene, *imgs) in enumerate(rows):
+        for c, img in enumerate(imgs):
+            ax = axes[r][c]
+            ax.imshow(img, interpolation="antialiased", aspect="auto")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if r == 0:
+                ax.set_title(titles[c], fontsize=11)
+    fig.suptitle(f"{stock}: --wedge (top) and --chart, previews through the config's "
+                 f"{DISPLAY} / {VIEW} view (MODEL.md 11)", fontsize=12)
+    fig.tight_layout()
+    path = os.path.join(out_dir, "preview_before_after.png")
+    fig.savefig(path)
+    plt.close(fig)
+    print("wrote", path)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--filmgrain", default="build/plugin/filmgrain")
     ap.add_argument("--out", default="docs/look")
+    ap.add_argument("--only", choices=["preview_before_after"],
+                    help="write only this picture (the others are left as they are)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        preview_before_after(a.filmgrain, a.out, tmp)
+    if a.only:
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         render(a.filmgrain, "vision3-500t", tmp, "chart_vision3-500t")
         look = render(a.filmgrain, "no-remjet", tmp, "chart_no-remjet")
@@ -135,7 +261,8 @@ def main():
     fig.savefig(os.path.join(a.out, "edge_profile.png"))
     print("wrote", ", ".join(os.path.join(a.out, f) for f in
                              ("chart_vision3-500t.png", "chart_no-remjet.png", "halation.png",
-                              "edge_profile.png", "dye_vs_silver.png")))
+                              "edge_profile.png", "dye_vs_silver.png",
+                              "preview_before_after.png")))
 
 
 if __name__ == "__main__":

@@ -60,7 +60,8 @@ Status time_key(const std::string& key, const std::string& path, double& out)
 
 Status parse(const Json& j, Datasheet& d)
 {
-    if (Status s = check_keys(j, { "name", "kind", "sources", "speed", "layers", "reciprocity" },
+    if (Status s = check_keys(j, { "name", "kind", "sources", "speed", "layers", "reciprocity",
+                                   "printing_density" },
                               "");
         !s)
         return s;
@@ -220,6 +221,17 @@ Status parse(const Json& j, Datasheet& d)
             }
             std::sort(d.extra_stops.begin(), d.extra_stops.end());
         }
+    }
+    if (j.contains("printing_density")) {
+        // The stock files' key, read by the stock parser (one reader, one
+        // set of rules): a stock of layers R, G, B that holds only it.
+        const Json stock = { { "layers", { { { "name", "R" } }, { { "name", "G" } },
+                                           { { "name", "B" } } } },
+                             { "printing_density", j["printing_density"] } };
+        Stock parsed;
+        if (Status s = parse_stock_json(stock.dump(), "", parsed); !s)
+            return Status::errorf(s.message().substr(s.message().find(": ") + 2));
+        d.printing_density = parsed.status_m_to_apd;
     }
     return {};
 }

@@ -91,6 +91,9 @@ struct Datasheet {
     std::optional<std::pair<double, double>> none_between;
     /// (time_s, extra stops), increasing time.
     std::vector<std::pair<double, double>> extra_stops;
+    /// MODEL.md 11: the Status M -> APD map (S-2008-002 Annex C), where
+    /// the datasheet gives one; a stock fitted to it takes it as it is.
+    std::optional<StatusMToApd> printing_density;
     /// The times reciprocity is measured at: every tabulated time and the
     /// ends of none_between (increasing, without reference_s).
     std::vector<double> reciprocity_times_s() const;

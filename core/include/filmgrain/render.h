@@ -25,6 +25,17 @@ namespace filmgrain {
 /// Largest |frame number| of a sequence.
 inline constexpr int64_t kMaxFrameNumber = 1000000000;
 
+/// What lies beyond the input's pixels (MODEL.md 2).
+enum class FrameEdge {
+    clamp,  ///< the scene continues: each point beyond the input has the
+            ///< exposure of the nearest edge pixel (OIIO's wrap=clamp), in
+            ///< the disc integrals, the light spread and the inhibitors
+    gate,   ///< no light beyond the input: the hard edge of a frame exposed
+            ///< inside a camera gate
+};
+const char* frame_edge_name(FrameEdge edge);
+bool parse_frame_edge(const std::string& name, FrameEdge& out);
+
 /// The shot: how the scene is exposed onto the film (MODEL.md 1-2).
 struct SceneSettings {
     /// Exposure offset in stops (2^stops on every exposure). [-64, 64].
@@ -43,6 +54,9 @@ struct SceneSettings {
     std::optional<int64_t> frame;
     /// With a frame: keep one grain pattern for every frame (`seed` as is).
     bool static_grain = false;
+    /// Beyond the input's pixels: the scene continues (clamp, the default)
+    /// or there is no light (gate).
+    FrameEdge edge = FrameEdge::clamp;
 
     Status validate() const;
 };

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -144,6 +145,23 @@ struct Layer {
     }
 };
 
+/// MODEL.md 11: how a colour stock's Status M densities (the datasheet
+/// curves' reader, what the layers' densities are) read in Academy
+/// Printing Density: APD = matrix * StM + offset on absolute densities,
+/// channels R, G, B (the layers named R, G and B), as A.M.P.A.S.
+/// S-2008-002 v1.1 Annex C publishes it per stock (a least-squares fit over
+/// 97 spectrally measured patches). The stock file's key is
+/// `printing_density: { status_m_to_apd: { matrix: [[3x3]], offset: [3] } }`
+/// (stocks/datasheets/README.md). The maths is in
+/// filmgrain/printing_density.h.
+struct StatusMToApd {
+    /// Rows: APD R, G, B out; columns: Status M R, G, B in. Each entry in
+    /// [-10, 10].
+    std::array<std::array<double, 3>, 3> matrix {};
+    /// Density added after the matrix, R, G, B. Each in [-10, 10].
+    std::array<double, 3> offset {};
+};
+
 /// A film stock: its layers and its processing (MODEL.md 2, 4, 5).
 struct Stock {
     std::string name        = "unnamed";
@@ -183,6 +201,10 @@ struct Stock {
     double base_refractive_index = 1.5;
     /// What lies behind its rear face.
     RearFace rear_face = RearFace::bare;
+    /// MODEL.md 11: the stock's Status M -> APD map (key `printing_density`),
+    /// or none: the stock then reads APD = Status M (said in the outputs'
+    /// metadata). Only for a stock with layers named R, G and B.
+    std::optional<StatusMToApd> status_m_to_apd;
 
     /// Whether any inhibition is on: without, development is MODEL.md 4's.
     bool inhibits() const;
