@@ -478,8 +478,8 @@ SpreadLight spread_light(const PlanContext& c)
         const size_t l     = spreading[static_cast<size_t>(i)];
         const Layer& layer = c.stock.layers[l];
         out.values[l]      = std::make_shared<const std::vector<float>>(spread_exposure(
-            layer, direct_exposure(c, l), c.input.frame_width(), c.input.frame_height(),
-            c.frame.input_pitch_um));
+            c.stock, layer, direct_exposure(c, l), c.input.frame_width(),
+            c.input.frame_height(), c.frame.input_pitch_um));
         out.seconds[l] = seconds_since(t0);
     });
     return out;
@@ -1156,9 +1156,15 @@ void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
         path << "spread=fft ";
         why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
             << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
-            << " " << halation_kernel_name(layer.halation_kernel) << " radius "
-            << format_g(layer.halation_radius_um)
-            << " um) over the whole frame, by its exact mean over each input pixel; ";
+            << " " << halation_kernel_name(layer.halation_kernel);
+        if (layer.halation_kernel == HalationKernel::base)
+            why << " (a " << format_g(c.stock.base_thickness_um) << " um base of index "
+                << format_g(c.stock.base_refractive_index) << ", rear face "
+                << rear_face_name(c.stock.rear_face) << ", reach "
+                << format_g(layer_halation(c.stock, layer).reach_um()) << " um)";
+        else
+            why << " radius " << format_g(layer.halation_radius_um) << " um";
+        why << ") over the whole frame, by its exact mean over each input pixel; ";
     }
     if (plan.inhibition) {
         path << "inhibition ";

@@ -74,8 +74,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         std::vector<double>& d = blurred[j];
         if (stock.inhibitor_diffusion_um > 0.0)
             d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
-                             stock.inhibitor_diffusion_um, 0.0, 0.0, HalationKernel::disc,
-                             scene.edge);
+                             stock.inhibitor_diffusion_um, HalationSpec(), scene.edge);
         for (double& v : d)
             v += fog[j];
     });

@@ -2,6 +2,7 @@
 #include "light_spread.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -118,7 +119,318 @@ std::vector<double> symmetric_spectrum(const PixelKernel& g, int64_t n, int64_t 
     return out;
 }
 
+/// n-point Gauss-Legendre nodes and weights on [0, 1]: Newton's method on
+/// the Legendre polynomial from Chebyshev's guesses, to rounding.
+struct GaussRule {
+    std::vector<double> x, w;
+};
+GaussRule gauss_legendre_01(int n)
+{
+    GaussRule g { std::vector<double>(static_cast<size_t>(n)),
+                  std::vector<double>(static_cast<size_t>(n)) };
+    for (int i = 0; i < n; ++i) {
+        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 1.0;
+        for (int it = 0; it < 100; ++it) {
+            double p0 = 1.0, p1 = 0.0;
+            for (int j = 1; j <= n; ++j) {
+                const double p2 = p1;
+                p1              = p0;
+                p0              = ((2.0 * j - 1.0) * z * p1 - (j - 1.0) * p2) / j;
+            }
+            dp              = n * (z * p0 - p1) / (z * z - 1.0);
+            const double dz = p0 / dp;
+            z -= dz;
+            if (std::fabs(dz) < 1e-16)
+                break;
+        }
+        g.x[static_cast<size_t>(i)] = 0.5 * (1.0 - z);
+        g.w[static_cast<size_t>(i)] = 1.0 / ((1.0 - z * z) * dp * dp);  // (2 / ...) / 2
+    }
+    return g;
+}
+
+/// The base kernel's pixel-square quadrature (base_halation_pixel_kernel):
+/// a 3-point Gauss-Legendre rule on [0, 1] per axis of a square where K is
+/// smooth.
+constexpr double kGl3Nodes[3]   = { 0.1127016653792583, 0.5, 0.8872983346207417 };
+constexpr double kGl3Weights[3] = { 5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0 };
+/// Largest square one rule covers, as a fraction of the larger of the
+/// base's thickness and the square's distance from the centre (K varies on
+/// the scale 2 t near it and as r^-4 far out): squares are halved until
+/// they are that small.
+constexpr double kBaseLeafOfScale = 1.0 / 16.0;
+/// Squares within this many of their sides inside the critical circle are
+/// integrated as those it crosses.
+constexpr double kKinkSquares = 4.0;
+
+/// The integrals of the base kernel K (cut at its reach) against the four
+/// corner functions of a pixel square, over squares inside it:
+/// m[0] = (1 - xi)(1 - eta), m[1] = xi (1 - eta), m[2] = (1 - xi) eta,
+/// m[3] = xi eta, (xi, eta) the pixel square's local coordinates in
+/// [0, 1]^2. Where K is smooth over the square, a 3x3 Gauss-Legendre rule.
+/// Where the critical circle (bare: R(theta) rises as 1 - c sqrt(theta_c -
+/// theta) just inside it, a kink) or the cut (a step) crosses the square,
+/// polar coordinates instead: the angle split where the square's entry or
+/// exit edge changes and where a circle meets its edges, each piece by a
+/// 16-point rule (4 at the cut, where K is smooth but for the step) in a
+/// smoothstep of the angle (the inner integral behaves as a power 3/2 at
+/// the pieces' ends); the radius split at the critical circle, the part
+/// inside it in q = sqrt(r_c - r), where K is smooth. The weights built
+/// from them sum to 1 within 3e-10 (light_spread_test).
+class SquareMoments {
+public:
+    SquareMoments(const BaseHalation& base, double pitch_um)
+        : m_base(base)
+        , m_p(pitch_um)
+        , m_ring(base.critical_radius_um())
+        , m_cut(base.reach_um())
+        , m_fine(gauss_legendre_01(16))
+        , m_coarse(gauss_legendre_01(4))
+    {
+    }
+
+    /// Adds to m the moments over [x0, x0 + h] x [y0, y0 + h] (x0, y0 >= 0)
+    /// of the pixel square whose corner is (ax, ay).
+    void add(double ax, double ay, double x0, double y0, double h, std::array<double, 4>& m) const
+    {
+        const double dmin = std::sqrt(x0 * x0 + y0 * y0);
+        const double dmax = std::sqrt((x0 + h) * (x0 + h) + (y0 + h) * (y0 + h));
+        if (dmin >= m_cut)
+            return;
+        if (h > kBaseLeafOfScale * std::max(m_base.thickness_um(), dmin)) {
+            const double q = 0.5 * h;
+            for (int c = 0; c < 4; ++c)
+                add(ax, ay, x0 + q * (c % 2), y0 + q * (c / 2), q, m);
+            return;
+        }
+        // Inside the critical circle R's slope grows without bound towards
+        // it: squares near it from inside take the polar rule too.
+        const bool kink = dmin < m_ring && m_ring < dmax + kKinkSquares * h;
+        if (kink || m_cut < dmax) {
+            polar(ax, ay, x0, y0, h, kink ? m_fine : m_coarse, m);
+            return;
+        }
+        for (int a = 0; a < 3; ++a) {
+            const double x = x0 + h * kGl3Nodes[a];
+            for (int b = 0; b < 3; ++b) {
+                const double y = y0 + h * kGl3Nodes[b];
+                accumulate(ax, ay, x, y, kGl3Weights[a] * kGl3Weights[b] * h * h
+                                              * m_base.density_at_r2(x * x + y * y),
+                           m);
+            }
+        }
+    }
+
+private:
+    void accumulate(double ax, double ay, double x, double y, double f,
+                    std::array<double, 4>& m) const
+    {
+        const double xi = (x - ax) / m_p, eta = (y - ay) / m_p;
+        m[0] += f * (1.0 - xi) * (1.0 - eta);
+        m[1] += f * xi * (1.0 - eta);
+        m[2] += f * (1.0 - xi) * eta;
+        m[3] += f * xi * eta;
+    }
+
+    void polar(double ax, double ay, double x0, double y0, double h, const GaussRule& rule,
+               std::array<double, 4>& m) const
+    {
+        const double x1 = x0 + h, y1 = y0 + h;
+        const double lo = std::atan2(y0, x1), hi = std::atan2(y1, x0);
+        std::vector<double> at { lo, hi, std::atan2(y1, x1) };
+        if (x0 > 0.0 || y0 > 0.0)
+            at.push_back(std::atan2(y0, x0));
+        for (double rho : { m_ring, m_cut }) {
+            if (!std::isfinite(rho))
+                continue;
+            for (double x : { x0, x1 })
+                if (x < rho) {
+                    const double y = std::sqrt(rho * rho - x * x);
+                    if (y > y0 && y < y1)
+                        at.push_back(std::atan2(y, x));
+                }
+            for (double y : { y0, y1 })
+                if (y < rho) {
+                    const double x = std::sqrt(rho * rho - y * y);
+                    if (x > x0 && x < x1)
+                        at.push_back(std::atan2(y, x));
+                }
+        }
+        std::sort(at.begin(), at.end());
+        for (size_t piece = 0; piece + 1 < at.size(); ++piece) {
+            const double a = std::max(at[piece], lo), b = std::min(at[piece + 1], hi);
+            if (!(b > a))
+                continue;
+            for (size_t k = 0; k < rule.x.size(); ++k) {
+                // phi = a + (b - a) (3 t^2 - 2 t^3), dphi = (b - a) 6 t (1 - t) dt.
+                const double t    = rule.x[k];
+                const double phi  = a + (b - a) * t * t * (3.0 - 2.0 * t);
+                const double wphi = rule.w[k] * (b - a) * 6.0 * t * (1.0 - t);
+                const double c = std::cos(phi), s = std::sin(phi);
+                const double r_in  = std::max(x0 > 0.0 ? x0 / c : 0.0, y0 > 0.0 ? y0 / s : 0.0);
+                const double r_out = std::min({ x1 / c, y1 / s, m_cut });
+                if (!(r_out > r_in))
+                    continue;
+                // r dr dphi: the area element.
+                const auto at_r = [&](double r, double weight) {
+                    accumulate(ax, ay, r * c, r * s, weight * r * m_base.density_per_um2(r), m);
+                };
+                const double split
+                    = std::isfinite(m_ring) ? std::clamp(m_ring, r_in, r_out) : r_out;
+                if (split > r_in) {
+                    if (std::isfinite(m_ring)) {
+                        // r = r_c - q^2 on [r_in, split]: dr = 2 q dq.
+                        const double q0 = std::sqrt(m_ring - split), q1 = std::sqrt(m_ring - r_in);
+                        for (size_t i = 0; i < rule.x.size(); ++i) {
+                            const double q = q0 + (q1 - q0) * rule.x[i];
+                            at_r(m_ring - q * q, wphi * rule.w[i] * (q1 - q0) * 2.0 * q);
+                        }
+                    } else {
+                        for (size_t i = 0; i < rule.x.size(); ++i)
+                            at_r(r_in + (split - r_in) * rule.x[i],
+                                 wphi * rule.w[i] * (split - r_in));
+                    }
+                }
+                if (r_out > split)
+                    for (size_t i = 0; i < rule.x.size(); ++i)
+                        at_r(split + (r_out - split) * rule.x[i],
+                             wphi * rule.w[i] * (r_out - split));
+            }
+        }
+    }
+
+    const BaseHalation& m_base;
+    double m_p, m_ring, m_cut;
+    GaussRule m_fine, m_coarse;
+};
+
 }  // namespace
+
+BaseHalation::BaseHalation(double thickness_um, double refractive_index, RearFace rear_face)
+    : m_thickness_um(thickness_um)
+    , m_n(refractive_index)
+    , m_rear_face(rear_face)
+{
+    // Rbar = integral of R over u = sin^2(theta) in [0, 1] (the Lambertian
+    // 2 sin cos dtheta is du): below u_c = 1 / n^2 Fresnel's, above it 1.
+    if (m_rear_face == RearFace::bare) {
+        const double uc = 1.0 / (m_n * m_n);
+        m_returned      = subcritical_integral(0.0) + (1.0 - uc);
+    }
+    // Beyond the critical angle R = 1 for both faces: the light beyond
+    // theta is cos^2(theta) / Rbar (docs/model.md), which is far below the
+    // subcritical share at kBaseHalationTail (n >= 1.3: cos^2(theta_c) >=
+    // 0.4), so the cut lies there.
+    const double cos2 = kBaseHalationTail * m_returned;
+    m_reach_um        = 2.0 * m_thickness_um * std::sqrt(1.0 / cos2 - 1.0);
+    m_inv_4t2         = 1.0 / (4.0 * m_thickness_um * m_thickness_um);
+    m_norm_per_um2    = 1.0 / (4.0 * M_PI * m_thickness_um * m_thickness_um * m_returned);
+    const double ring = critical_radius_um();
+    m_ring2_um2       = std::isfinite(ring) ? ring * ring : 0.0;  // remjet: R = 1 everywhere
+}
+
+BaseHalation::BaseHalation(const Stock& stock)
+    : BaseHalation(stock.base_thickness_um, stock.base_refractive_index, stock.rear_face)
+{
+}
+
+double BaseHalation::reflectance(double cos_theta) const
+{
+    if (m_rear_face == RearFace::remjet)
+        return 1.0;
+    const double c = cos_theta;
+    // Snell: sin(theta_t) = n sin(theta); at or past 1, total reflection.
+    const double st2 = m_n * m_n * (1.0 - c * c);
+    if (st2 >= 1.0)
+        return 1.0;
+    const double ct = std::sqrt(1.0 - st2);
+    const double rs = (m_n * c - ct) / (m_n * c + ct);  // s: n cos(i) vs cos(t)
+    const double rp = (c - m_n * ct) / (c + m_n * ct);  // p: cos(i) vs n cos(t)
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+double BaseHalation::subcritical_integral(double u) const
+{
+    // With v = cos(theta_t) = sqrt(1 - n^2 u), u = (1 - v^2) / n^2 and
+    // du = -2 v / n^2 dv: the integral of R(v) 2 v / n^2 over [0, v(u)],
+    // smooth in v (the square-root kink of R at the critical angle is
+    // gone). 8 panels of the 8-point rule: exact to rounding.
+    const double n2 = m_n * m_n;
+    const double v1 = std::sqrt(std::max(0.0, 1.0 - n2 * u));
+    double sum      = 0.0;
+    const int panels = 8;
+    for (int k = 0; k < panels; ++k) {
+        const double a = v1 * k / panels, b = v1 * (k + 1) / panels;
+        for (int i = 0; i < 8; ++i) {
+            const double x = i < 4 ? -kGlNodes[i] : kGlNodes[i - 4];
+            const double v = 0.5 * (a + b) + 0.5 * (b - a) * x;
+            const double c = std::sqrt((n2 - 1.0 + v * v) / n2);  // cos(theta)
+            sum += kGlWeights[i < 4 ? i : i - 4] * 0.5 * (b - a) * reflectance(c) * 2.0 * v / n2;
+        }
+    }
+    return sum;
+}
+
+double BaseHalation::density_per_um2(double r_um) const { return density_at_r2(r_um * r_um); }
+
+double BaseHalation::density_at_r2(double r2_um2) const
+{
+    // tan(theta) = r / 2t; the Lambertian 2 sin cos dtheta mapped to r by
+    // dr = 2t / cos^2(theta) dtheta over the ring 2 pi r dr.
+    const double cos2 = 1.0 / (1.0 + r2_um2 * m_inv_4t2);
+    const double r    = r2_um2 >= m_ring2_um2 ? 1.0 : reflectance(std::sqrt(cos2));
+    return r * cos2 * cos2 * m_norm_per_um2;
+}
+
+double BaseHalation::light_beyond(double r_um) const
+{
+    const double x    = r_um / (2.0 * m_thickness_um);
+    const double cos2 = 1.0 / (1.0 + x * x);
+    const double u    = 1.0 - cos2;  // sin^2(theta)
+    if (m_rear_face == RearFace::remjet)
+        return cos2;
+    const double uc = 1.0 / (m_n * m_n);
+    if (u >= uc)
+        return cos2 / m_returned;
+    return (subcritical_integral(u) + (1.0 - uc)) / m_returned;
+}
+
+double BaseHalation::critical_radius_um() const
+{
+    if (m_rear_face == RearFace::remjet)
+        return std::numeric_limits<double>::infinity();
+    // tan(theta_c) = 1 / sqrt(n^2 - 1).
+    return 2.0 * m_thickness_um / std::sqrt(m_n * m_n - 1.0);
+}
+
+bool HalationSpec::on() const
+{
+    return fraction > 0.0 && (kernel == HalationKernel::base ? base_thickness_um > 0.0
+                                                              : radius_um > 0.0);
+}
+
+double HalationSpec::reach_um() const
+{
+    if (!on())
+        return 0.0;
+    if (kernel != HalationKernel::base)
+        return radius_um;
+    return BaseHalation(base_thickness_um, base_refractive_index, rear_face).reach_um();
+}
+
+HalationSpec layer_halation(const Stock& stock, const Layer& layer)
+{
+    HalationSpec h;
+    h.fraction  = layer.halation;
+    h.kernel    = layer.halation_kernel;
+    h.radius_um = layer.halation_radius_um;
+    if (layer.halation_kernel == HalationKernel::base) {
+        h.base_thickness_um     = stock.base_thickness_um;
+        h.base_refractive_index = stock.base_refractive_index;
+        h.rear_face             = stock.rear_face;
+    }
+    return h;
+}
 
 int64_t fft_size_at_least(int64_t n)
 {
@@ -218,20 +530,103 @@ PixelKernel halation_pixel_kernel(HalationKernel kernel, double radius_um, doubl
     return k;
 }
 
+PixelKernel base_halation_pixel_kernel(const BaseHalation& base, double pitch_um,
+                                       int64_t max_reach)
+{
+    const double p   = pitch_um;
+    const double cut = base.reach_um();
+    PixelKernel k;
+    k.reach = std::min<int64_t>(static_cast<int64_t>(std::ceil(cut / p)) + 1,
+                                std::max<int64_t>(max_reach, 0));
+    const int64_t R = k.reach, n = 2 * R + 1;
+    // The weight of offset (i, j) is the integral of K against the tent
+    // (1 - |x - i p| / p)(1 - |y - j p| / p): over each of the four pixel
+    // squares around (i p, j p) a bilinear function. So each pixel square
+    // [a p, a p + p] x [b p, b p + p] (a, b >= 0; K is radial, the other
+    // quadrants mirror it) is integrated once against the four corner
+    // functions of its local (xi, eta) in [0, 1]^2 (SquareMoments).
+    const int64_t side = R + 1;
+    const SquareMoments integrate(base, p);
+    std::vector<std::array<double, 4>> moments(static_cast<size_t>(side * side));
+    for (int64_t b = 0; b < side; ++b)
+        for (int64_t a = b; a < side; ++a) {  // a >= b; the others by symmetry
+            std::array<double, 4> m { 0.0, 0.0, 0.0, 0.0 };
+            integrate.add(a * p, b * p, a * p, b * p, p, m);
+            moments[static_cast<size_t>(b * side + a)] = m;
+            // The square mirrored in the diagonal swaps xi and eta.
+            moments[static_cast<size_t>(a * side + b)] = { m[0], m[2], m[1], m[3] };
+        }
+    // Offset i's tent covers square i with (1 - xi) and square i - 1 with
+    // xi; at i = 0, square 0 and its mirror image, both with (1 - xi).
+    struct Part {
+        int64_t square;
+        int corner;  ///< 0: (1 - xi), 1: xi
+        double times;
+    };
+    const auto parts = [](int64_t i, Part out[2]) {
+        if (i == 0) {
+            out[0] = { 0, 0, 2.0 };
+            return 1;
+        }
+        out[0] = { i, 0, 1.0 };
+        out[1] = { i - 1, 1, 1.0 };
+        return 2;
+    };
+    // The quadrant's weights (i, j >= 0), each pair (i, j), (j, i) computed
+    // once (exactly symmetric), then mirrored into the four quadrants row by
+    // row.
+    std::vector<double> quadrant(static_cast<size_t>(side * side));
+    const double scale = 1.0 / (1.0 - kBaseHalationTail);  // the cut kernel's integral
+    for (int64_t j = 0; j <= R; ++j)
+        for (int64_t i = j; i <= R; ++i) {
+            Part px[2], py[2];
+            const int nx = parts(i, px), ny = parts(j, py);
+            double w = 0.0;
+            for (int u = 0; u < nx; ++u)
+                for (int v = 0; v < ny; ++v) {
+                    if (px[u].square >= side || py[v].square >= side)
+                        continue;
+                    const auto& m
+                        = moments[static_cast<size_t>(py[v].square * side + px[u].square)];
+                    w += px[u].times * py[v].times
+                         * m[static_cast<size_t>(px[u].corner + 2 * py[v].corner)];
+                }
+            quadrant[static_cast<size_t>(j * side + i)] = w * scale;
+            quadrant[static_cast<size_t>(i * side + j)] = w * scale;
+        }
+    moments = {};
+    k.weights.resize(static_cast<size_t>(n * n));
+    for (int64_t y = -R; y <= R; ++y) {
+        const double* row = quadrant.data() + std::abs(y) * side;
+        double* out       = k.weights.data() + (y + R) * n;
+        for (int64_t x = -R; x <= R; ++x)
+            out[x + R] = row[std::abs(x)];
+    }
+    return k;
+}
+
 std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
-                                 double scatter_sigma_um, double halation,
-                                 double halation_radius_um, HalationKernel halation_kernel,
-                                 FrameEdge edge)
+                                 double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge)
 {
     const int64_t w = frame_width, h = frame_height;
     const bool scattering = scatter > 0.0 && scatter_sigma_um > 0.0;
-    const bool haloing    = halation > 0.0 && halation_radius_um > 0.0;
+    const bool haloing    = halo.on();
+    const bool base       = haloing && halo.kernel == HalationKernel::base;
     const double s        = scattering ? scatter : 0.0;
+    const double halation = halo.fraction;
     // The transform's size, checked before anything is built: a kernel far
     // wider than the frame's pixels (a tiny pitch) must not exhaust memory.
-    const double reach_px = (scattering ? 6.0 * scatter_sigma_um / pitch_um + 2.0 : 0.0)
-                            + (haloing ? halation_radius_um / pitch_um + 2.0 : 0.0);
+    // With nothing beyond the frame (gate), the base kernel's offsets
+    // beyond it (plus the Gaussian's reach) meet no pair of the frame's
+    // pixels: they are left out. With the scene continued (clamp) the
+    // margin's light comes from the whole reach.
+    const bool crop         = base && edge == FrameEdge::gate;
+    const double scatter_px = scattering ? 6.0 * scatter_sigma_um / pitch_um + 2.0 : 0.0;
+    double halo_px          = haloing ? halo.reach_um() / pitch_um + 2.0 : 0.0;
+    if (crop)
+        halo_px = std::min(halo_px, static_cast<double>(std::max(w, h)) + scatter_px);
+    const double reach_px  = scatter_px + halo_px;
     const double margin_px = (edge == FrameEdge::clamp ? 2.0 : 1.0) * reach_px;
     const double cells = (static_cast<double>(w) + margin_px) * (static_cast<double>(h) + margin_px);
     if (!(cells <= kMaxTransformCells))
@@ -240,13 +635,21 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
             + std::to_string(pitch_um) + " um beyond a " + std::to_string(w) + "x"
             + std::to_string(h) + " frame, a transform of " + std::to_string(cells)
             + " values, above the limit of " + std::to_string(kMaxTransformCells)
-            + ": lower scatter_sigma_um, halation_radius_um or inhibitor_diffusion_um, or "
-              "render a coarser input");
+            + (base ? ": lower scatter_sigma_um, base_thickness_um or inhibitor_diffusion_um, or "
+                      "render a coarser input"
+                    : ": lower scatter_sigma_um, halation_radius_um or inhibitor_diffusion_um, or "
+                      "render a coarser input"));
     PixelKernel g, k;
     if (scattering)
         g = gaussian_pixel_kernel(scatter_sigma_um, pitch_um);
-    if (haloing)
-        k = halation_pixel_kernel(halation_kernel, halation_radius_um, pitch_um);
+    if (base)
+        k = base_halation_pixel_kernel(BaseHalation(halo.base_thickness_um,
+                                                    halo.base_refractive_index, halo.rear_face),
+                                       pitch_um,
+                                       crop ? std::max(w, h) - 1 + g.reach
+                                            : std::numeric_limits<int64_t>::max());
+    else if (haloing)
+        k = halation_pixel_kernel(halo.kernel, halo.radius_um, pitch_um);
     // A period of at least the frame plus the kernels' reach: the circular
     // convolution then wraps only zeros into the frame (gate). With the
     // scene continued beyond the frame (clamp, MODEL.md 2), the frame sits
@@ -287,6 +690,7 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
             for (int64_t i = -k.reach; i <= k.reach; ++i)
                 kernel->real((i + nx) % nx, (j + ny) % ny)
                     = k.weights[static_cast<size_t>((j + k.reach) * n + (i + k.reach))];
+        k = PixelKernel();  // its weights are in the grid now
         kernel->transform(true);
     }
 
@@ -317,8 +721,9 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
     return out;
 }
 
-std::vector<float> spread_exposure(const Layer& layer, const LayerExposure& exposure,
-                                   int64_t frame_width, int64_t frame_height, double pitch_um)
+std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
+                                   const LayerExposure& exposure, int64_t frame_width,
+                                   int64_t frame_height, double pitch_um)
 {
     std::vector<double> values(static_cast<size_t>(frame_width * frame_height));
     for (int64_t y = 0; y < frame_height; ++y)
@@ -326,8 +731,7 @@ std::vector<float> spread_exposure(const Layer& layer, const LayerExposure& expo
             values[static_cast<size_t>(y * frame_width + x)] = exposure.value(x, y);
     const std::vector<double> spread
         = spread_frame(values, frame_width, frame_height, pitch_um, layer.scatter,
-                       layer.scatter_sigma_um, layer.halation, layer.halation_radius_um,
-                       layer.halation_kernel, exposure.edge());
+                       layer.scatter_sigma_um, layer_halation(stock, layer), exposure.edge());
     std::vector<float> out(spread.size());
     for (size_t i = 0; i < spread.size(); ++i)
         out[i] = static_cast<float>(std::min<double>(spread[i], std::numeric_limits<float>::max()));

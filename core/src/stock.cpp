@@ -55,12 +55,12 @@ const NumberField<Layer> kLayerFields[] = {
     { "cloud_density", &Layer::cloud_density, 0.0, 20.0, true },
 };
 
-/// A layer's keys that name one of a few words: the key, its values (the
-/// enum's order) and where it is stored.
-template<typename E> struct WordField {
+/// A key that names one of a few words: the key, its values (the enum's
+/// order) and where it is stored in a T (a Layer or the Stock).
+template<typename T, typename E> struct WordField {
     const char* key;
     std::vector<const char*> words;
-    E Layer::*member;
+    E T::*member;
 };
 
 const NumberField<Stock> kStockFields[] = {
@@ -71,6 +71,8 @@ const NumberField<Stock> kStockFields[] = {
     { "base_density", &Stock::base_density, 0.0, 10.0, false },
     { "max_density", &Stock::max_density, 0.0, 20.0, true },
     { "inhibitor_diffusion_um", &Stock::inhibitor_diffusion_um, 0.0, 1000.0, false },
+    { "base_thickness_um", &Stock::base_thickness_um, 0.0, 2000.0, false },
+    { "base_refractive_index", &Stock::base_refractive_index, 1.3, 2.0, false },
 };
 
 /// Largest entry of the inhibition matrix (MODEL.md 10): exp(-10 D) at a
@@ -175,26 +177,33 @@ Status parse_population(const Json& j, const std::string& path, Population& out)
     return read_numbers(j, kPopulationFields, {}, path + ".", out);
 }
 
-const WordField<HalationKernel>& halation_kernel_field()
+const WordField<Layer, HalationKernel>& halation_kernel_field()
 {
-    static const WordField<HalationKernel> f { "halation_kernel", { "disc", "ring" },
-                                               &Layer::halation_kernel };
+    static const WordField<Layer, HalationKernel> f { "halation_kernel",
+                                                      { "disc", "ring", "base" },
+                                                      &Layer::halation_kernel };
     return f;
 }
-const WordField<LayerImage>& image_field()
+const WordField<Layer, LayerImage>& image_field()
 {
-    static const WordField<LayerImage> f { "image", { "silver", "dye" }, &Layer::image };
+    static const WordField<Layer, LayerImage> f { "image", { "silver", "dye" }, &Layer::image };
     return f;
 }
-const WordField<CloudProfile>& cloud_profile_field()
+const WordField<Layer, CloudProfile>& cloud_profile_field()
 {
-    static const WordField<CloudProfile> f { "cloud_profile", { "disc", "gaussian" },
-                                             &Layer::cloud_profile };
+    static const WordField<Layer, CloudProfile> f { "cloud_profile", { "disc", "gaussian" },
+                                                    &Layer::cloud_profile };
+    return f;
+}
+const WordField<Stock, RearFace>& rear_face_field()
+{
+    static const WordField<Stock, RearFace> f { "rear_face", { "remjet", "bare" },
+                                                &Stock::rear_face };
     return f;
 }
 
-template<typename E>
-Status read_word(const Json& j, const WordField<E>& field, const std::string& prefix, Layer& out)
+template<typename T, typename E>
+Status read_word(const Json& j, const WordField<T, E>& field, const std::string& prefix, T& out)
 {
     std::string word;
     if (Status s = read_string(j, field.key, prefix, word); !s)
@@ -210,7 +219,7 @@ Status read_word(const Json& j, const WordField<E>& field, const std::string& pr
     return Status::errorf(prefix, field.key, " = '", word, "': must be one of ", allowed);
 }
 
-template<typename E> const char* word_of(const WordField<E>& field, E value)
+template<typename T, typename E> const char* word_of(const WordField<T, E>& field, E value)
 {
     return field.words[static_cast<size_t>(value)];
 }
@@ -366,6 +375,8 @@ const char* halation_kernel_name(HalationKernel kernel)
     return word_of(halation_kernel_field(), kernel);
 }
 
+const char* rear_face_name(RearFace face) { return word_of(rear_face_field(), face); }
+
 const char* layer_image_name(LayerImage image) { return word_of(image_field(), image); }
 
 const char* cloud_profile_name(CloudProfile profile)
@@ -411,9 +422,24 @@ Status Stock::validate() const
         if (layer.scatter > 0.0 && layer.scatter_sigma_um <= 0.0)
             return Status::errorf(prefix, "scatter = ", format_number(layer.scatter),
                                   " needs scatter_sigma_um > 0 (the width of the spread)");
-        if (layer.halation > 0.0 && layer.halation_radius_um <= 0.0)
+        if (layer.halation_kernel == HalationKernel::base) {
+            // The base kernel's size is the base's (docs/model.md, "Halation
+            // from the base"): a radius as well would say two things.
+            if (layer.halation_radius_um != 0.0)
+                return Status::errorf(prefix, "halation_radius_um = ",
+                                      format_number(layer.halation_radius_um),
+                                      " with halation_kernel 'base': the base kernel's size "
+                                      "follows from base_thickness_um and "
+                                      "base_refractive_index; give 0 or leave it out");
+            if (layer.halation > 0.0 && base_thickness_um <= 0.0)
+                return Status::errorf(prefix, "halation = ", format_number(layer.halation),
+                                      " with halation_kernel 'base' needs the stock's "
+                                      "base_thickness_um > 0 (it is ",
+                                      format_number(base_thickness_um), ")");
+        } else if (layer.halation > 0.0 && layer.halation_radius_um <= 0.0) {
             return Status::errorf(prefix, "halation = ", format_number(layer.halation),
                                   " needs halation_radius_um > 0 (the radius of the halo)");
+        }
         if (layer.populations.empty() || layer.populations.size() > kMaxPopulations)
             return Status::errorf(prefix, "populations has ", layer.populations.size(),
                                   " entries: must have 1 to ", kMaxPopulations);
@@ -480,10 +506,12 @@ Status parse_stock_json(const std::string& text, const std::string& origin, Stoc
 
     Stock stock;
     const std::set<std::string> other_keys = { "name", "description", "layers", "inhibition",
-                                               "printing_density" };
+                                               "rear_face", "printing_density" };
     Status s = read_numbers(j, kStockFields, other_keys, "", stock);
     if (s)
         s = read_string(j, "name", "", stock.name);
+    if (s && j.contains("rear_face"))
+        s = read_word(j, rear_face_field(), "", stock);
     if (s)
         s = read_string(j, "description", "", stock.description);
     if (s) {
@@ -550,6 +578,7 @@ std::string stock_to_json(const Stock& stock, int indent)
     j["description"] = stock.description;
     for (const auto& f : kStockFields)
         j[f.key] = stock.*(f.member);
+    j["rear_face"]  = rear_face_name(stock.rear_face);
     j["inhibition"] = Json::array();
     for (size_t k = 0; k < stock.layers.size(); ++k) {
         Json row = Json::array();

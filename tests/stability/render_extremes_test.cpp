@@ -403,7 +403,8 @@ TEST(StabilityRender, HugeExposureSaturatesAndFinishes)
 }
 
 // MODEL.md 8-10 at their extremes, every engine: kernels far below and far
-// above the pixel (a point-like halo, a 5 mm halo on a 0.2 mm frame, a
+// above the pixel (a point-like halo, a 5 mm halo on a 0.2 mm frame, the
+// base kernel of a 1 nm base and of a 2 mm glass plate (reach 164 mm), a
 // near-zero scatter width), all light scattered or reflected, dye clouds a
 // tenth and ten times their grain with a peak density far over the clamp,
 // and the strongest inhibition with no and with the widest diffusion. The
@@ -425,6 +426,18 @@ TEST(StabilityRender, LookExtremes)
               s.layers[0].halation = 1.0;
               s.layers[0].halation_radius_um = 5000.0;
               s.layers[0].halation_kernel = HalationKernel::ring;
+          } },
+        { "base halo of a 1 nm base", [](Stock& s) {
+              s.layers[0].halation = 1.0;
+              s.layers[0].halation_kernel = HalationKernel::base;
+              s.base_thickness_um = 1e-3;
+          } },
+        { "base halo of a 2 mm bare glass plate", [](Stock& s) {
+              s.layers[0].halation = 1.0;
+              s.layers[0].halation_kernel = HalationKernel::base;
+              s.base_thickness_um = 2000.0;
+              s.base_refractive_index = 2.0;
+              s.rear_face = RearFace::bare;
           } },
         { "all light scattered, tiny width", [](Stock& s) {
               s.layers[0].scatter = 1.0;

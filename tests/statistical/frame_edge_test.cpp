@@ -1,8 +1,9 @@
 // The frame's edge (MODEL.md 2): the scene continues beyond the input
 // (clamp-to-edge), so a uniform plate gives a uniform negative up to its
 // outermost pixels, in the grains' disc integrals (paper's 6 um grains on
-// 6 um pixels straddle the edge), the light spread (vision3-500t's 220 um
-// halation and 5 um scatter) and the inhibitors (its 20 um diffusion). With
+// 6 um pixels straddle the edge), the light spread (vision3-500t's halation
+// from its base, a glow reaching 7.9 mm, and 5 um scatter) and the
+// inhibitors (its 20 um diffusion). With
 // edge=gate (no light beyond the frame) the rim differs: these tests also
 // check that they see it then, so that they can fail.
 //
@@ -124,8 +125,9 @@ TEST(FrameEdge, PaperHasNoRimWhenTheSceneContinues)
 
 TEST(FrameEdge, Vision3HasNoRimFromLightSpreadOrInhibition)
 {
-    // vision3-500t on 6 um pixels, 192x128 (1.15 mm: the 220 um halation
-    // reaches 37 pixels in), at the grey step and 4.5 stops over (where
+    // vision3-500t on 6 um pixels, 192x128 (1.15 mm: its base kernel's
+    // halation, half its light within 250 um, reaches across the whole
+    // frame), at the grey step and 4.5 stops over (where
     // the issue measured the red rim 0.010 D light and the green rim
     // 0.05 D dense under gate); auto and fast (the exact engine at this
     // size takes minutes: its disc integrals are the ones the paper test
@@ -143,7 +145,8 @@ TEST(FrameEdge, Vision3HasNoRimFromLightSpreadOrInhibition)
                         << ", layer " << stock.layers[l].name;
             }
     // Under gate the red rim at grey is lighter and the green at +4.5 denser
-    // (measured z 11 and -24).
+    // (measured z 11 and -24 with the 220 um disc, 10.6 and -24.4 with the
+    // base kernel).
     const std::vector<double> grey  = rim_z(stock, Engine::automatic, FrameEdge::gate, 0.0, 3, 192, 128, 6.0);
     const std::vector<double> over  = rim_z(stock, Engine::automatic, FrameEdge::gate, 4.5, 3, 192, 128, 6.0);
     EXPECT_GT(grey[0], 4.0) << "gate's red rim (less halation light) no longer seen";

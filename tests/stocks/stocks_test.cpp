@@ -233,7 +233,9 @@ TEST(Datasheet, CurvePointsAreReadOffTheStocksCurve)
 // layer with halation h measures as the same layer with its sensitivity
 // times 1 + h (every figure: curves, speed, granularity, inhibition), and
 // its speed point lies log10(1 + h) lower than without it (to the chain
-// tables' bound: 0.176 here, about 6 times that bound).
+// tables' bound: 0.176 here, about 6 times that bound). The halo is the
+// stock's own kernel, the film base's (docs/model.md), as a disc's would
+// be: every kernel is normalised.
 TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
 {
     const sm::Datasheet sheet = datasheet("kodak-vision3-500t-5219.json");
@@ -242,8 +244,8 @@ TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
     for (Layer& l : plain.layers)  // without the stock's own spread
         l.scatter = l.scatter_sigma_um = l.halation = l.halation_radius_um = 0.0;
     Stock halo = plain, brighter = plain;
+    ASSERT_EQ(halo.layers[0].halation_kernel, HalationKernel::base);
     halo.layers[0].halation           = 0.5;
-    halo.layers[0].halation_radius_um = 220.0;
     halo.layers[0].scatter            = 0.25;
     halo.layers[0].scatter_sigma_um   = 5.0;
     for (double& w : brighter.layers[0].sensitivity)
@@ -402,12 +404,14 @@ TEST(Fitter, LightSpreadLeavesTheFiguresWhereTheSearchPutThem)
     ASSERT_TRUE(load_stock("vision3-500t", start));
     start.layers[0].halation           = 0.1;
     start.layers[0].halation_radius_um = 100.0;
+    start.layers[0].halation_kernel    = HalationKernel::disc;
     fit::FitOptions o = quick_green_search(start, 10);
     fit::FitResult plain, spread;
     Status s = fit::fit_stock(sheet, o, plain);
     ASSERT_TRUE(s) << s.message();
     o.light_spread["R"] = { 0.2, 5.0, 0.25, 220.0, HalationKernel::ring };
-    o.light_spread["B"] = { 0.0, 0.0, 0.02, 220.0, HalationKernel::disc };
+    o.light_spread["B"] = { 0.0, 0.0, 0.02, 0.0, HalationKernel::base };
+    o.film_base         = { 140.0, 1.65, RearFace::bare };
     s                   = fit::fit_stock(sheet, o, spread);
     ASSERT_TRUE(s) << s.message();
     const Layer& r = spread.stock.layers[0];
@@ -417,6 +421,10 @@ TEST(Fitter, LightSpreadLeavesTheFiguresWhereTheSearchPutThem)
     EXPECT_EQ(r.halation_radius_um, 220.0);
     EXPECT_EQ(r.halation_kernel, HalationKernel::ring);
     EXPECT_EQ(spread.stock.layers[1].halation, start.layers[1].halation);  // not named: kept
+    EXPECT_EQ(spread.stock.layers[2].halation_kernel, HalationKernel::base);
+    EXPECT_EQ(spread.stock.base_thickness_um, 140.0);
+    EXPECT_EQ(spread.stock.base_refractive_index, 1.65);
+    EXPECT_EQ(spread.stock.rear_face, RearFace::bare);
     const double gain[3] = { 1.1 / 1.25, 1.0, 1.0 / 1.02 };
     for (size_t l = 0; l < 3; ++l)
         for (size_t p = 0; p < r.populations.size(); ++p)
@@ -434,6 +442,11 @@ TEST(Fitter, LightSpreadLeavesTheFiguresWhereTheSearchPutThem)
     EXPECT_FALSE(fit::fit_stock(sheet, o, spread));
     o.light_spread.erase("X");
     o.light_spread["G"] = { 0.0, 0.0, 0.1, 0.0, HalationKernel::disc };  // no radius
+    EXPECT_FALSE(fit::fit_stock(sheet, o, spread));
+    o.light_spread["G"] = { 0.0, 0.0, 0.1, 220.0, HalationKernel::base };  // base and a radius
+    EXPECT_FALSE(fit::fit_stock(sheet, o, spread));
+    o.light_spread.erase("G");
+    o.film_base->thickness_um = 0.0;  // the base kernel without a base
     EXPECT_FALSE(fit::fit_stock(sheet, o, spread));
 }
 

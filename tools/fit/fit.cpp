@@ -522,9 +522,15 @@ LayerImage fitted_image(const sm::Datasheet& sheet, const FitOptions& options)
 }
 
 /// FitOptions::light_spread given to `stock`'s layers, each population's
-/// quantum efficiency divided by the uniform-field gain it adds.
+/// quantum efficiency divided by the uniform-field gain it adds, and
+/// FitOptions::film_base to the stock.
 void apply_light_spread(const FitOptions& options, Stock& stock)
 {
+    if (options.film_base) {
+        stock.base_thickness_um     = options.film_base->thickness_um;
+        stock.base_refractive_index = options.film_base->refractive_index;
+        stock.rear_face             = options.film_base->rear_face;
+    }
     for (Layer& l : stock.layers) {
         const auto it = options.light_spread.find(l.name);
         if (it == options.light_spread.end())

@@ -136,10 +136,21 @@ struct FitOptions {
         double scatter            = 0.0;
         double scatter_sigma_um   = 0.0;
         double halation           = 0.0;
-        double halation_radius_um = 0.0;
+        double halation_radius_um = 0.0;  ///< disc and ring; 0 with base
         HalationKernel halation_kernel = HalationKernel::disc;
     };
     std::map<std::string, LayerSpread> light_spread;
+    /// The film base the `base` halation kernel reads (the stock's
+    /// base_thickness_um, base_refractive_index and rear_face: docs/model.md,
+    /// "Halation from the base"), given to the fitted stock; unset: the
+    /// start stock's (or none). Like the spread, a choice no figure
+    /// measures.
+    struct FilmBase {
+        double thickness_um     = 0.0;
+        double refractive_index = 1.5;
+        RearFace rear_face      = RearFace::bare;
+    };
+    std::optional<FilmBase> film_base;
     /// Progress lines (nullptr: silent).
     std::function<void(const std::string&)> progress;
 };

@@ -87,15 +87,22 @@ void usage(std::ostream& os)
           "                     (default: none; with --start, the start stock's own)\n"
           "  --scatter-sigma-um X  micrometres, 0 to 1000 (needed with --scatter)\n"
           "  --halation L=F,... the fitted stock's halation (MODEL.md 9): fraction F of\n"
-          "                     layer L's light reflected back, in a kernel of\n"
-          "                     --halation-radius-um (default: none; with --start, the\n"
-          "                     start stock's own). A layer named in either list gets\n"
-          "                     exactly these keys. Uniform patches see halation as\n"
-          "                     1 + F times the light and scatter not at all: the search\n"
-          "                     runs without them, then every quantum efficiency of\n"
-          "                     the layer is divided by 1 + F (the same figures)\n"
-          "  --halation-radius-um X  micrometres, 0 to 5000 (needed with --halation)\n"
-          "  --halation-kernel disc|ring  (default disc)\n"
+          "                     layer L's light reflected back, in the kernel below\n"
+          "                     (default: none; with --start, the start stock's own).\n"
+          "                     A layer named in either list gets exactly these keys.\n"
+          "                     Uniform patches see halation as 1 + F times the light\n"
+          "                     and scatter not at all: the search runs without them,\n"
+          "                     then every quantum efficiency of the layer is divided\n"
+          "                     by 1 + F (the same figures)\n"
+          "  --halation-kernel disc|ring|base  (default disc); base: the glow the film\n"
+          "                     base returns (docs/model.md), sized by the base below\n"
+          "  --halation-radius-um X  micrometres, 0 to 5000 (needed with --halation and\n"
+          "                     a disc or ring kernel; an error with base)\n"
+          "  --base-thickness-um X  the film base's thickness, micrometres, 0 to 2000\n"
+          "                     (needed with --halation-kernel base unless --start\n"
+          "                     has one; only with it)\n"
+          "  --base-refractive-index X  the base's index, 1.3 to 2 (default 1.5)\n"
+          "  --rear-face remjet|bare  what lies behind the base (default bare)\n"
           "  --inhibition, --no-inhibition  search each layer's self-inhibition (MODEL.md\n"
           "                     10, diffusion "
        << d.inhibitor_diffusion_um
@@ -241,6 +248,8 @@ int main(int argc, char** argv)
     std::map<std::string, double> scatter, halation;
     std::optional<double> scatter_sigma_um, halation_radius_um;
     std::optional<filmgrain::HalationKernel> halation_kernel;
+    std::optional<double> base_thickness_um, base_refractive_index;
+    std::optional<filmgrain::RearFace> rear_face;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const auto next = [&](const char* what) -> std::string {
@@ -350,13 +359,26 @@ int main(int argc, char** argv)
         } else if (a == "--halation-radius-um") {
             halation_radius_um = number("micrometres", 0.0, 5000.0);
         } else if (a == "--halation-kernel") {
-            const std::string v = next("disc or ring");
-            if (v != "disc" && v != "ring") {
-                std::cerr << "filmgrain-fit: --halation-kernel " << v << ": must be disc or ring\n";
+            const std::string v = next("disc, ring or base");
+            if (v != "disc" && v != "ring" && v != "base") {
+                std::cerr << "filmgrain-fit: --halation-kernel " << v
+                          << ": must be disc, ring or base\n";
                 return 2;
             }
-            halation_kernel = v == "disc" ? filmgrain::HalationKernel::disc
-                                          : filmgrain::HalationKernel::ring;
+            halation_kernel = v == "disc"   ? filmgrain::HalationKernel::disc
+                              : v == "ring" ? filmgrain::HalationKernel::ring
+                                            : filmgrain::HalationKernel::base;
+        } else if (a == "--base-thickness-um") {
+            base_thickness_um = number("micrometres", 0.0, 2000.0);
+        } else if (a == "--base-refractive-index") {
+            base_refractive_index = number("a number", 1.3, 2.0);
+        } else if (a == "--rear-face") {
+            const std::string v = next("remjet or bare");
+            if (v != "remjet" && v != "bare") {
+                std::cerr << "filmgrain-fit: --rear-face " << v << ": must be remjet or bare\n";
+                return 2;
+            }
+            rear_face = v == "remjet" ? filmgrain::RearFace::remjet : filmgrain::RearFace::bare;
         } else if (a == "--inhibition") {
             opt.inhibition = true;
         } else if (a == "--no-inhibition") {
@@ -388,6 +410,30 @@ int main(int argc, char** argv)
         || (halation_kernel && halation.empty())) {
         std::cerr << "filmgrain-fit: --scatter-sigma-um needs --scatter, --halation-radius-um "
                      "and --halation-kernel need --halation\n";
+        return 2;
+    }
+    const bool base_kernel = halation_kernel == filmgrain::HalationKernel::base;
+    if ((base_thickness_um || base_refractive_index || rear_face) && !base_kernel) {
+        std::cerr << "filmgrain-fit: --base-thickness-um, --base-refractive-index and "
+                     "--rear-face describe the base that --halation-kernel base reads\n";
+        return 2;
+    }
+    if (base_kernel && halation_radius_um) {
+        std::cerr << "filmgrain-fit: --halation-radius-um sizes the disc and ring kernels; "
+                     "the base kernel's size follows from --base-thickness-um\n";
+        return 2;
+    }
+    if (base_kernel && base_thickness_um) {
+        // Without it, the start's base (none without a start: the fitted
+        // stock's check then names base_thickness_um).
+        filmgrain::fit::FitOptions::FilmBase base;
+        base.thickness_um     = *base_thickness_um;
+        base.refractive_index = base_refractive_index.value_or(base.refractive_index);
+        base.rear_face        = rear_face.value_or(base.rear_face);
+        opt.film_base         = base;
+    } else if (base_kernel && (base_refractive_index || rear_face)) {
+        std::cerr << "filmgrain-fit: --base-refractive-index and --rear-face need "
+                     "--base-thickness-um (without it, the --start stock's base is kept whole)\n";
         return 2;
     }
     for (const auto* list : { &scatter, &halation })

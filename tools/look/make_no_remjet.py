@@ -6,15 +6,16 @@ grains, dye clouds, latent-image rates, inhibitors, scatter and
 processing, unchanged) on a base whose anti-halation backing has been
 removed (CineStill 800T is widely said to be VISION3 500T without its
 rem-jet). Only the
-halation changes (MODEL.md 9): the light the base's rear surface reflects
-back is no longer absorbed. The strengths are a choice of look, not
-published figures: red 0.25, green 0.06, blue 0.01 of the layer's light
-(the red layer lies nearest the base; the yellow filter under the blue
-layer keeps blue light from the base), in a disc of 220 um, about where a
-base 125 um thick returns the light that meets its rear surface at the
-critical angle (2 x 125 um x tan 41.8 deg = 223 um for n = 1.5; the
-thickness is our assumption: Kodak gives 120 um for its ESTAR base, e.g.
-in VISION Color Intermediate 2242's datasheet).
+halation changes (MODEL.md 9): the base's rear face is bare (`rear_face`
+"bare": air behind it), so the light it reflects back is no longer
+absorbed, and every layer returns it through the `base` kernel
+(docs/model.md, "Halation from the base": Fresnel reflection below the
+critical angle, total internal reflection above it, a bright ring at
+2 t tan(theta_c) = 229 um in a glow that fades as r^-4; the base is
+vision3-500t's, 125 um of index 1.48, our choice). The strengths are a
+choice of look, not published figures: red 0.25, green 0.06, blue 0.01 of
+the layer's light (the red layer lies nearest the base; the yellow filter
+under the blue layer keeps blue light from the base).
 
 The quantum efficiencies stay the fitted emulsion's, so on a uniform patch
 each layer gets (1 + its halation) times the light (MODEL.md 9) and
@@ -33,8 +34,8 @@ import os
 import sys
 
 HALATION = {"R": 0.25, "G": 0.06, "B": 0.01}
-HALATION_RADIUS_UM = 220.0
-HALATION_KERNEL = "disc"
+HALATION_KERNEL = "base"
+REAR_FACE = "bare"
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -46,13 +47,16 @@ def no_remjet(vision3_500t):
         "vision3-500t (fitted to Kodak's published figures for VISION3 500T 5219: its grains, "
         "dye clouds, rates, inhibitors and scatter) on a base without its anti-halation "
         "rem-jet backing, which is what CineStill 800T is widely said to be: strong red halation, weaker green, "
-        "almost no blue (the red layer lies nearest the base), in a 220 um disc (MODEL.md 9). "
+        "almost no blue (the red layer lies nearest the base), returned by the bare base: a bright "
+        "ring at its critical angle in a soft glow (MODEL.md 9; docs/model.md, 'Halation from the "
+        "base'). "
         "The halation strengths are a choice of look, not published figures; with them the "
         "red layer measures 0.29 stop faster than 500T's, the green 0.08. Written by "
         "tools/look/make_no_remjet.py.")
+    stock["rear_face"] = REAR_FACE  # the base's thickness and index stay vision3-500t's
     for layer in stock["layers"]:
         layer["halation"] = HALATION[layer["name"]]
-        layer["halation_radius_um"] = HALATION_RADIUS_UM
+        layer["halation_radius_um"] = 0.0  # the base kernel's size is the base's
         layer["halation_kernel"] = HALATION_KERNEL
     return stock
 

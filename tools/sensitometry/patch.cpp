@@ -6,6 +6,8 @@
 #include <cmath>
 #include <thread>
 
+#include "light_spread.h"
+
 namespace filmgrain::sensitometry {
 
 double patch_margin_um(const Stock& stock, double pitch_um)
@@ -21,12 +23,13 @@ double patch_margin_um(const Stock& stock, double pitch_um)
 
 double patch_spread_reach_um(const Stock& stock)
 {
-    // The kernels' truncation (core/src/light_spread.h: 6 sigma) and
+    // The kernels' truncation (core/src/light_spread.h: 6 sigma; the base
+    // kernel's reach, where kBaseHalationTail of its light is cut) and
     // radius; inhibition blurs densities made from the spread exposure.
     double spread_um = 0.0;
     for (const Layer& layer : stock.layers)
         spread_um = std::max(spread_um, (layer.scatters() ? 6.0 * layer.scatter_sigma_um : 0.0)
-                                            + (layer.halates() ? layer.halation_radius_um : 0.0));
+                                            + layer_halation(stock, layer).reach_um());
     return spread_um + (stock.inhibits() ? 6.0 * stock.inhibitor_diffusion_um : 0.0);
 }
 
@@ -46,10 +49,9 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
                               " um: need 0 < pitch <= side");
     if (spec.blocks < 2 || spec.blocks > 64)
         return Status::errorf("patch blocks = ", spec.blocks, ": must be in [2, 64]");
-    const int64_t side_px   = std::max<int64_t>(spec.blocks, std::llround(spec.side_um / spec.pitch_um));
-    const double pitch_um   = spec.pitch_um;
-    const int64_t margin_px = static_cast<int64_t>(std::ceil(patch_margin_um(stock, pitch_um) / pitch_um));
-    const int64_t scan_px   = side_px + 2 * margin_px;
+    const int64_t side_px
+        = std::max<int64_t>(spec.blocks, std::llround(spec.side_um / spec.pitch_um));
+    const double pitch_um = spec.pitch_um;
 
     // A grey input over the whole frame: every grain whose disc lies in
     // the frame sees the same exposure. Grey y = 0.18 at an exposure
@@ -57,12 +59,30 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     // H = v / 0.18 * exposure_at_grey_lxs * 2^stops). One input pixel,
     // unless the stock spreads light or inhibits development (MODEL.md 9,
     // 10): those act on the input's pixels with nothing beyond the frame,
-    // so the input has the scan's pixels and the margin the kernels'
-    // reach, and the square's pixels see a uniform field's values.
+    // so the input has the scan's pixels (at most kMaxPatchInputPx a side:
+    // the base kernel reaches 8 to 10 mm, 4000 to 5000 pixels of 2 um;
+    // coarser input pixels see the same uniform field) and the margin the
+    // kernels' reach plus an input pixel, and the square's pixels see a
+    // uniform field's values.
     const float grey = spec.exposure_lxs > 0.0 ? 0.18f : 0.0f;
     const bool spreads = patch_spread_reach_um(stock) > 0.0;
-    const std::vector<float> input_pixels(
-        spreads ? static_cast<size_t>(scan_px * scan_px) : size_t(1), grey);
+    int64_t margin_px = 0, scan_px = 0, input_px = 1;
+    for (double input_pitch_um = pitch_um;;) {
+        margin_px = static_cast<int64_t>(
+            std::ceil(patch_margin_um(stock, input_pitch_um) / pitch_um));
+        scan_px   = side_px + 2 * margin_px;
+        if (!spreads)
+            break;
+        input_px = std::min(scan_px, kMaxPatchInputPx);
+        // The input pitch grows with the scan it covers: until the margin
+        // holds the pitch it was computed with (two rounds at most).
+        const double pitch
+            = static_cast<double>(scan_px) * pitch_um / static_cast<double>(input_px);
+        if (pitch <= input_pitch_um)
+            break;
+        input_pitch_um = pitch;
+    }
+    const std::vector<float> input_pixels(static_cast<size_t>(input_px * input_px), grey);
     SceneSettings scene;
     scene.exposure_stops = spec.exposure_lxs > 0.0
                                ? std::log2(spec.exposure_lxs / stock.exposure_at_grey_lxs)
@@ -70,7 +90,6 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     scene.shutter_s      = spec.shutter_s;
     scene.frame_width_mm = static_cast<double>(scan_px) * pitch_um / 1000.0;
     scene.seed           = spec.seed;
-    const int64_t input_px = spreads ? scan_px : 1;
     const ImageView input { input_pixels.data(), input_px, input_px, 1 };
     RenderSettings rs;
     rs.engine     = settings.engine;

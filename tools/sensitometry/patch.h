@@ -94,8 +94,12 @@ struct PatchReading {
 
 /// Margin around the measured square, micrometres: the radius of a grain
 /// at z = 6 of the largest population's log-normal (a grain in 1e9 is
-/// larger), plus patch_spread_reach_um, plus one pixel.
+/// larger), plus patch_spread_reach_um, plus one input pixel of pitch_um.
 double patch_margin_um(const Stock& stock, double pitch_um);
+
+/// Most input pixels a side of a patch whose stock spreads light or
+/// inhibits development (expose_patch: then coarser than the scan's).
+inline constexpr int64_t kMaxPatchInputPx = 2048;
 
 /// How far the stock's light spread and inhibitor blur (MODEL.md 9, 10)
 /// carry a point's light or density, micrometres (0 for a stock with

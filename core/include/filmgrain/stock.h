@@ -44,17 +44,29 @@ struct Population {
     bool coupler_limited() const { return max_dye_density > 0.0; }
 };
 
-/// The shape of a layer's halation kernel (MODEL.md 9), both normalised to
+/// The shape of a layer's halation kernel (MODEL.md 9), each normalised to
 /// unit integral: `disc`, uniform inside halation_radius_um; `ring`, uniform
 /// on the annulus between kRingInnerFraction * halation_radius_um and
 /// halation_radius_um (light reflected from the base's rear surface comes
-/// back concentrated near the radius).
-enum class HalationKernel { disc, ring };
+/// back concentrated near the radius); `base`, the glow the film base
+/// returns (docs/model.md, "Halation from the base"), its size and shape
+/// computed from the stock's base_thickness_um, base_refractive_index and
+/// rear_face (halation_radius_um is then 0).
+enum class HalationKernel { disc, ring, base };
 
 /// Inner radius of the `ring` halation kernel, as a fraction of its radius.
 inline constexpr double kRingInnerFraction = 0.75;
 
 const char* halation_kernel_name(HalationKernel kernel);
+
+/// What lies behind the film base's rear face (docs/model.md, "Halation
+/// from the base"): `remjet`, an absorbing backing in optical contact with
+/// the base (no step to air: light that reaches the face crosses into the
+/// backing and is absorbed, at every angle alike); `bare`, air (Fresnel
+/// reflection below the critical angle, total internal reflection above).
+enum class RearFace { remjet, bare };
+
+const char* rear_face_name(RearFace face);
 
 /// What a layer's developed grains leave (MODEL.md 8): opaque silver discs
 /// (section 5), or clouds of dye whose densities add.
@@ -89,8 +101,9 @@ struct Layer {
     /// Fraction of the (scattered) light reflected back into the layer from
     /// the base. Range [0, 1].
     double halation = 0.0;
-    /// Radius of the halation kernel, micrometres on the film. Range
-    /// [0, 5000]; > 0 when halation > 0.
+    /// Radius of the `disc` and `ring` halation kernels, micrometres on the
+    /// film. Range [0, 5000]; > 0 when halation > 0 with those kernels, 0
+    /// with `base` (whose size follows from the stock's film base).
     double halation_radius_um = 0.0;
     HalationKernel halation_kernel = HalationKernel::disc;
 
@@ -104,9 +117,14 @@ struct Layer {
     double cloud_density = 1.0;
 
     /// Whether the layer scatters light / has a halo (MODEL.md 9): a
-    /// fraction and a width both above 0.
+    /// fraction and a width both above 0 (for the `base` kernel the width
+    /// is the stock's base_thickness_um, > 0 in a valid stock).
     bool scatters() const { return scatter > 0.0 && scatter_sigma_um > 0.0; }
-    bool halates() const { return halation > 0.0 && halation_radius_um > 0.0; }
+    bool halates() const
+    {
+        return halation > 0.0
+               && (halation_kernel == HalationKernel::base || halation_radius_um > 0.0);
+    }
 
     /// Whether the layer's exposure is spread at all (MODEL.md 9): a layer
     /// without spread is rendered exactly as before the keys existed.
@@ -173,6 +191,16 @@ struct Stock {
     /// Standard deviation of the inhibitors' diffusion, micrometres on the
     /// film. Range [0, 1000].
     double inhibitor_diffusion_um = 0.0;
+    /// The film base under the emulsion, read by the `base` halation kernel
+    /// (docs/model.md, "Halation from the base"); one base for every layer.
+    /// Its thickness, micrometres: range [0, 2000]; > 0 when a layer with
+    /// halation > 0 uses the `base` kernel (0: not given).
+    double base_thickness_um = 0.0;
+    /// Its refractive index: range [1.3, 2] (cellulose triacetate ~1.48,
+    /// polyester ~1.65).
+    double base_refractive_index = 1.5;
+    /// What lies behind its rear face.
+    RearFace rear_face = RearFace::bare;
     /// MODEL.md 11: the stock's Status M -> APD map (key `printing_density`),
     /// or none: the stock then reads APD = Status M (said in the outputs'
     /// metadata). Only for a stock with layers named R, G and B.
