@@ -217,7 +217,9 @@ TEST(LightSpread, BaseProfileIsTheFormula)
                 1e-20);
     EXPECT_NEAR(remjet.light_beyond(2.0 * t), 0.5, 1e-15);
     EXPECT_NEAR(remjet.light_beyond(6.0 * t), 0.1, 1e-15);
-    EXPECT_NEAR(remjet.reach_um(), 2.0 * t * std::sqrt(999.0), 1e-9);
+    // Cut where cos^2(theta) = kBaseHalationTail: 2t sqrt(99) at 1e-2.
+    EXPECT_NEAR(remjet.reach_um(), 2.0 * t * std::sqrt(1.0 / kBaseHalationTail - 1.0), 1e-9);
+    EXPECT_NEAR(remjet.reach_um(), 2487.47, 0.01);
 }
 
 /// The base kernel's weight for offset (i, j) by brute force: the mean
@@ -299,8 +301,8 @@ TEST(LightSpread, BaseWeightsAreTheProfileOverEachAnnulus)
 TEST(LightSpread, BaseKernelSumsToOne)
 {
     // The weights are K's exact integrals (the quadrature's error, measured
-    // at most 3.0e-10 at pitches from 3 um (not run here: 1 s a kernel) to
-    // 389 um, coarser than the base, 1.5e-11 at a 4K frame's 6.08 um) over the
+    // at most 4.6e-11 at pitches from 6.08 um (a 4K frame's: 1.5e-11) to
+    // 389 um, coarser than the base) over the
     // truncated kernel's analytic integral: they sum to 1 within 1e-9, bare
     // with n from 1.3 to 2, and remjet (whose shape has no n). The bright
     // ring's kink is where a plain rule on the pixel squares missed, by up
@@ -621,7 +623,8 @@ TEST(LightSpread, AKernelFarWiderThanThePixelsIsAnError)
     // A 5 mm halo on 0.01 um pixels: 5e5 pixels of reach. Refused before
     // anything is allocated, with the keys to change. The base kernel's
     // offsets beyond the frame are left out, so it needs a frame that
-    // large: 20000 pixels of 0.5 um, its reach (10 mm: 20000 pixels) on top.
+    // large: 40000 pixels of 0.25 um, its reach (3.2 mm: 12900 pixels) on
+    // top, 6.8e8 values.
     Layer halo;
     halo.halation           = 0.5;
     halo.halation_radius_um = 5000.0;
@@ -637,7 +640,7 @@ TEST(LightSpread, AKernelFarWiderThanThePixelsIsAnError)
     base.kernel            = HalationKernel::base;
     base.base_thickness_um = 125.0;
     try {
-        spread_frame(std::vector<double>(20000, 1.0), 20000, 1, 0.5, 0.0, 0.0, base,
+        spread_frame(std::vector<double>(40000, 1.0), 40000, 1, 0.25, 0.0, 0.0, base,
                      FrameEdge::gate);
         FAIL() << "no error";
     } catch (const std::runtime_error& e) {

@@ -374,7 +374,7 @@ def test_tiles_equal_whole_frame(fg_bin, tmp_path):
 def test_tiles_of_a_sequence_frame_with_roi(fg_bin, tmp_path):
     """One frame of a sequence (--frames 7, its grain) with a roi and a
     scan size, in 3 tiles: equals the CLI's frame (settings hash included)."""
-    args = ["--wedge", "--filmgrain:width_mm=0.5:seed=9:scan=500:roi=10,5,300,40",
+    args = ["--wedge", "--filmgrain:seed=9:scan=500:roi=10,5,300,40",
             "--frames", "7"]
     run_cli(fg_bin, *args, "-o", tmp_path / "whole.#.exr", "-q")
     r = run_farm(fg_bin, "--tiles", "3", *args, "-o", tmp_path / "tiled.#.exr", "-q")

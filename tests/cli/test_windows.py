@@ -49,14 +49,18 @@ def expected_scan_window(data, display, scan_w):
 def test_any_overscan_renders_at_any_scan(run, dirs):
     """A 2048x1556 display window with 155 px of overscan left and right and
     1 px above and below (the issue's plates), at proxy scans 256 and 1024:
-    the negative covers the overscan rounded outward, and says so."""
+    the negative covers the overscan rounded outward, and says so. The
+    plate is a 2K scan of a Super 35 frame (24.89 mm, 12 um pixels): FAST's
+    0.5 mm would make its pixels 0.24 um, finer than any scan, and the
+    default stock's base halation (2.5 mm) would then need a transform over
+    the limit (refused with a clear error, docs/model.md)."""
     indir, outdir = dirs
     display = (0, 0, 2048, 1556)
     data = (-155, -1, 2048 + 310, 1556 + 2)
     write_windowed(indir / "plate.exr", data, display)
     for scan in (256, 1024):
         out, stats = outdir / f"n{scan}.exr", outdir / f"n{scan}.json"
-        r = run(indir / "plate.exr", f"--filmgrain:{FAST}:scan={scan}", "-o", out,
+        r = run(indir / "plate.exr", f"--filmgrain:width_mm=24.89:scan={scan}", "-o", out,
                 "--stats", stats)
         assert r.returncode == 0, r.stderr
         (x0, y0, x1, y1), exact, scan_h = expected_scan_window(data, display, scan)
