@@ -142,6 +142,19 @@ std::string join(const std::vector<std::string>& names)
     return s;
 }
 
+/// The colour space `name` names in `config` (a name, an alias or a role,
+/// case-insensitive: OCIO's getColorSpace), or an error naming the config
+/// and the spaces it knows. Called inside the callers' try blocks.
+Status lookup_colorspace(const OCIO::Config& config, const ConfigInfo& info,
+                         const std::string& name, OCIO::ConstColorSpaceRcPtr& out)
+{
+    out = name.empty() ? nullptr : config.getColorSpace(name.c_str());
+    if (!out)
+        return Status::errorf("unknown colour space '", name, "' in config ", describe(info),
+                              "; known: ", join(known_names(config)));
+    return Status();
+}
+
 // --- Chromaticities ----------------------------------------------------------
 // Matrices act on column vectors (out = M in, M[row][column]), as the
 // standards write them; Imath's own `v * M` takes v as a row, so mul() is
@@ -428,16 +441,9 @@ Status InputConverter::create(const std::string& config_path,
                                   "' role: filmgrain converts its input to "
                                   "scene_linear");
         }
-        // getColorSpace resolves names, aliases and roles (case-insensitive).
-        OCIO::ConstColorSpaceRcPtr src = src_colorspace.empty()
-                                             ? nullptr
-                                             : config.getColorSpace(
-                                                 src_colorspace.c_str());
-        if (!src) {
-            return Status::errorf("unknown colour space '", src_colorspace,
-                                  "' in config ", describe(loaded.info),
-                                  "; known: ", join(known_names(config)));
-        }
+        OCIO::ConstColorSpaceRcPtr src;
+        if (Status s = lookup_colorspace(config, loaded.info, src_colorspace, src); !s.ok())
+            return s;
 
         auto impl                     = std::make_unique<Impl>();
         impl->info                    = loaded.info;
@@ -606,13 +612,9 @@ Status Converter::create(const std::string& config_path, const std::string& src_
     try {
         OCIO::ConstColorSpaceRcPtr cs[2];
         const std::string* names[2] = { &src_colorspace, &dst_colorspace };
-        for (int i = 0; i < 2; ++i) {
-            cs[i] = names[i]->empty() ? nullptr : config.getColorSpace(names[i]->c_str());
-            if (!cs[i])
-                return Status::errorf("unknown colour space '", *names[i], "' in config ",
-                                      describe(loaded.info), "; known: ",
-                                      join(known_names(config)));
-        }
+        for (int i = 0; i < 2; ++i)
+            if (Status s = lookup_colorspace(config, loaded.info, *names[i], cs[i]); !s.ok())
+                return s;
         auto impl         = std::make_unique<Impl>();
         impl->info        = loaded.info;
         impl->source      = cs[0]->getName();
@@ -646,11 +648,9 @@ Status Converter::create_display_view(const std::string& config_path,
         return s;
     const OCIO::Config& config = *loaded.config;
     try {
-        OCIO::ConstColorSpaceRcPtr src
-            = src_colorspace.empty() ? nullptr : config.getColorSpace(src_colorspace.c_str());
-        if (!src)
-            return Status::errorf("unknown colour space '", src_colorspace, "' in config ",
-                                  describe(loaded.info), "; known: ", join(known_names(config)));
+        OCIO::ConstColorSpaceRcPtr src;
+        if (Status s = lookup_colorspace(config, loaded.info, src_colorspace, src); !s.ok())
+            return s;
         const std::vector<std::string> displays = display_names(config);
         const std::string d = display.empty() ? std::string(config.getDefaultDisplay()) : display;
         if (std::find(displays.begin(), displays.end(), d) == displays.end())
@@ -736,12 +736,9 @@ Status compare_chromaticities(const std::string& config_path, const std::string&
         return s;
     const OCIO::Config& config = *loaded.config;
     try {
-        OCIO::ConstColorSpaceRcPtr cs
-            = colorspace.empty() ? nullptr : config.getColorSpace(colorspace.c_str());
-        if (!cs)
-            return Status::errorf("unknown colour space '", colorspace, "' in config ",
-                                  describe(loaded.info), "; known: ",
-                                  join(known_names(config)));
+        OCIO::ConstColorSpaceRcPtr cs;
+        if (Status s = lookup_colorspace(config, loaded.info, colorspace, cs); !s.ok())
+            return s;
         ChromaticitiesRoute route;
         if (Status s = plan_route(config, loaded.info, cs, xy, route); !s.ok())
             return s;

@@ -2,6 +2,7 @@
 // and read like a densitometer. Writes CSV for every curve and
 // results.json with every derived number, then runs plot.py, which draws
 // the PNG plots and writes summary.md. Usage: see --help.
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -662,6 +664,19 @@ int main(int argc, char** argv)
             }
             return argv[++i];
         };
+        // A whole number in [lo, hi], or exit 2 naming the option.
+        const auto integer = [&](unsigned long long lo, unsigned long long hi) {
+            const std::string v = value();
+            char* end           = nullptr;
+            errno               = 0;
+            const unsigned long long x = std::strtoull(v.c_str(), &end, 10);
+            if (v.empty() || v[0] == '-' || *end || errno == ERANGE || x < lo || x > hi) {
+                std::cerr << "filmgrain-sensitometry: " << a << " " << v
+                          << ": must be a whole number in [" << lo << ", " << hi << "]\n";
+                std::exit(2);
+            }
+            return x;
+        };
         if (a == "--help" || a == "-h") {
             usage(std::cout);
             return 0;
@@ -675,9 +690,9 @@ int main(int argc, char** argv)
                 return 2;
             }
         } else if (a == "--threads") {
-            o.nthreads = std::atoi(value().c_str());
+            o.nthreads = static_cast<int>(integer(0, 1024));
         } else if (a == "--seed") {
-            o.seed = std::strtoull(value().c_str(), nullptr, 10);
+            o.seed = integer(0, std::numeric_limits<uint64_t>::max());
         } else if (a == "--only") {
             o.sections.clear();
             std::stringstream ss(value());
