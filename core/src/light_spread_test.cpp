@@ -329,7 +329,7 @@ TEST(LightSpread, BaseKernelSumsToOne)
     // frame's edges gets exactly 1 + halation times the light (float
     // storage: within 1.2e-7, one unit in the last place, relative), as
     // Layer::uniform_field_gain says, with and without scatter. 100 um
-    // pixels, reach 103 (bare) pixels; a frame of 240.
+    // pixels, reach 33 (bare) pixels; a frame of 240.
     Stock stock;
     stock.base_thickness_um = 125.0;
     for (RearFace face : { RearFace::bare, RearFace::remjet }) {
@@ -349,11 +349,12 @@ TEST(LightSpread, BaseKernelSumsToOne)
                         rear_face_name(face), scatter, out[120 * w + 120] / 3.75 - 1.0);
         }
         // The scene continued beyond the frame (edge=clamp, MODEL.md 2): a
-        // uniform plate far smaller than the reach (4 mm; the kernel's
-        // light comes from up to 10.2 mm away, from the margin) gets 1.25
-        // at every pixel, its corners included: the whole kernel is used.
-        // (Cut at the frame as under gate, the kernel missed up to 7.0e-4
-        // of the light, bare; 3.4e-4, remjet.)
+        // uniform plate about the reach's size (4 mm; the kernel's light
+        // comes from up to 3.2 mm away, much of it from the margin) gets
+        // 1.25 at every pixel, its corners included: the whole kernel is
+        // used. (Cut at the frame as under gate, the kernel missed up to
+        // 7.0e-4 of the light, bare, 3.4e-4, remjet, measured with the
+        // kernel cut at 1e-3.)
         const int64_t c = 40;
         const std::vector<float> plate(c * c, 3.0f);
         halo.scatter          = 0.3;

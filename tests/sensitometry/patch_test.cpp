@@ -13,10 +13,11 @@ namespace filmgrain::sensitometry {
 namespace {
 
 // `paper`'s silver layer with all its light returned by a bare base 125 um
-// thick (halation 1: the base kernel reaches 10.2 mm) on a 1 mm patch of
-// 2 um pixels: its margin is that reach, a scan of 10.8k pixels a side; an
-// input of the scan's pixels would need a transform of 2.5e8 values (4 GB
-// in its two grids), so the input has at most kMaxPatchInputPx. The square
+// thick (halation 1: the base kernel reaches 3.2 mm) on a 1 mm patch of
+// 2 um pixels: its margin is that reach, a scan of 3.7k pixels a side; an
+// input of the scan's pixels would need a transform of 4.8e7 values
+// (0.8 GB in its two grids; 2.5e8 and 4 GB when the kernel was cut at
+// 1e-3, 10.2 mm), so the input has at most kMaxPatchInputPx. The square
 // gets the light of the layer with twice its sensitivity and no halation
 // (MODEL.md 9 on a uniform field: 1 + halation times the light): its grains
 // absorb as many photons each. Tolerance: a grain's count X has

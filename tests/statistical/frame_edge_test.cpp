@@ -2,7 +2,7 @@
 // (clamp-to-edge), so a uniform plate gives a uniform negative up to its
 // outermost pixels, in the grains' disc integrals (paper's 6 um grains on
 // 6 um pixels straddle the edge), the light spread (vision3-500t's halation
-// from its base, a glow reaching 7.9 mm, and 5 um scatter) and the
+// from its base, a glow reaching 2.5 mm, and 5 um scatter) and the
 // inhibitors (its 20 um diffusion). With
 // edge=gate (no light beyond the frame) the rim differs: these tests also
 // check that they see it then, so that they can fail.
