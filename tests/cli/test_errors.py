@@ -4,12 +4,13 @@
 
 import json
 import os
+import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import (FAST, assert_nothing_written, listing, minimal_ocio_config, rgb_ramp,
-                      write_image)
+from conftest import (FAST, assert_nothing_written, clean_env, listing, minimal_ocio_config,
+                      rgb_ramp, write_image)
 
 
 def truncate(path):
@@ -158,12 +159,38 @@ def test_output_parent_is_a_file(run, dirs):
                      ["cannot write", "Not a directory"], [(indir, ["ramp.exr"])])
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root ignores directory permissions")
-def test_output_directory_unwritable(run, dirs):
+def as_unprivileged(run, fg_bin):
+    """`run`, or as root (which ignores directory permissions: CI runs as
+    root) the same command as user nobody through util-linux's setpriv.
+    Skips, saying why, where nobody cannot run the CLI (a build tree under
+    a directory closed to others)."""
+    if os.geteuid() != 0:
+        return run
+    drop = ["setpriv", "--reuid=nobody", "--regid=nogroup", "--clear-groups"]
+    probe = subprocess.run([*drop, fg_bin, "--version"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        pytest.skip(f"root, and user nobody cannot run {fg_bin}: {probe.stderr.strip()}")
+
+    def _run(*args, env=None, timeout=120):
+        return subprocess.run([*drop, fg_bin, *[str(a) for a in args]], capture_output=True,
+                              text=True, env=env if env is not None else clean_env(),
+                              timeout=timeout)
+
+    return _run
+
+
+def test_output_directory_unwritable(run, fg_bin, dirs):
     indir, outdir = dirs
+    src = ramp(indir)
+    # pytest makes its temporary directories 0700: open them (and the base
+    # above) to nobody, who runs the CLI when the tests run as root.
+    for d in (indir.parent.parent, indir.parent, indir, outdir):
+        d.chmod(0o755)
+    src.chmod(0o644)
     outdir.chmod(0o555)
     try:
-        run_expect_error(run, [ramp(indir), f"--filmgrain:{FAST}", "-o", outdir / "o.exr"],
+        run_expect_error(as_unprivileged(run, fg_bin),
+                         [src, f"--filmgrain:{FAST}", "-o", outdir / "o.exr"],
                          ["cannot write", "Permission denied"], [(outdir, [])])
     finally:
         outdir.chmod(0o755)
