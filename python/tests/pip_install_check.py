@@ -1,5 +1,6 @@
-"""package.pip_install: `pip install .` works on this machine and the
-installed module renders what the CLI renders.
+"""package.pip_install: `pip install .` works on this machine, the
+installed module renders what the CLI renders, and it installs the
+`filmgrain` CLI that filmgrain-farm runs.
 
 Steps (each timed and printed):
   1. a fresh venv: python3 -m venv --system-site-packages WORK/venv
@@ -9,7 +10,11 @@ Steps (each timed and printed):
   3. from WORK (not the source tree, so that nothing but the installed
      package can be imported), the installed module renders a small scene;
      its density must be byte-identical to the CLI's (FILMGRAIN_BIN) on the
-     same scene; the extension must not need any libfilmgrain_* library.
+     same scene; the extension must not need any libfilmgrain_* library;
+  4. the installed CLI (WORK/venv/bin/filmgrain) renders the same scene
+     byte-identically and needs no libfilmgrain_* library either;
+  5. the installed filmgrain-farm, with no FILMGRAIN_BIN and a PATH without
+     the venv, finds that CLI beside itself and renders the wedge.
 
     pip_install_check.py --source DIR --work DIR [--python PYTHON]
 
@@ -42,18 +47,21 @@ spec = oiio.ImageSpec(64, 48, 3, oiio.FLOAT)
 out = oiio.ImageOutput.create("scene.exr")
 assert out.open("scene.exr", spec) and out.write_image(pixels), oiio.geterror()
 out.close()
-r = subprocess.run([os.environ["FILMGRAIN_BIN"], "scene.exr", "--iscolorspace", "scene_linear",
-                    "--filmgrain:stock=color-negative:seed=12:frame=3:width_mm=0.5:roi=4,4,50,40",
-                    "-o", "cli.exr", "-q"], capture_output=True, text=True)
-assert r.returncode == 0, r.stderr
-
 negative = filmgrain.render(pixels, stock="color-negative", seed=12, frame=3, width_mm=0.5,
                             roi=(4, 4, 50, 40))
-buf = oiio.ImageBuf("cli.exr")
-cli = buf.get_pixels(oiio.FLOAT)
-names = list(buf.spec().channelnames)
-cli = np.stack([cli[:, :, names.index(n)] for n in negative.channels], axis=-1)
-assert negative.density.tobytes() == np.ascontiguousarray(cli).tobytes(), "differs from the CLI"
+# The build tree's CLI, then the one pip installed beside this interpreter.
+for cli_bin in (os.environ["FILMGRAIN_BIN"], os.path.join(venv, "bin", "filmgrain")):
+    r = subprocess.run([cli_bin, "scene.exr", "--iscolorspace", "scene_linear",
+                        "--filmgrain:stock=color-negative:seed=12:frame=3:width_mm=0.5:"
+                        "roi=4,4,50,40", "-o", "cli.exr", "-q"], capture_output=True, text=True)
+    assert r.returncode == 0, (cli_bin, r.stderr)
+    inp = oiio.ImageInput.open("cli.exr")
+    cli = inp.read_image(oiio.FLOAT)
+    names = list(inp.spec().channelnames)
+    inp.close()
+    cli = np.stack([cli[:, :, names.index(n)] for n in negative.channels], axis=-1)
+    assert negative.density.tobytes() == np.ascontiguousarray(cli).tobytes(), \
+        f"differs from the CLI {cli_bin}"
 print("installed module:", filmgrain.__file__, filmgrain.__version__, negative)
 print("extension:", filmgrain._filmgrain.__file__)
 """
@@ -65,8 +73,9 @@ def run(cmd, **kw):
     r = subprocess.run([str(c) for c in cmd], **kw)
     seconds = time.monotonic() - t0
     if r.returncode != 0:
+        said = (r.stdout or "") + (r.stderr or "") if kw.get("capture_output") else ""
         raise SystemExit(f"pip_install_check: FAIL: exit status {r.returncode} "
-                         f"after {seconds:.1f} s")
+                         f"after {seconds:.1f} s" + (f":\n{said}" if said else ""))
     return r, seconds
 
 
@@ -98,6 +107,24 @@ def main():
                if "libfilmgrain" in line or "not found" in line]
         if bad:
             raise SystemExit("pip_install_check: FAIL: the extension needs " + "; ".join(bad))
+        cli_bin = os.path.join(venv, "bin", "filmgrain")
+        needed, _ = run(["ldd", cli_bin], capture_output=True, text=True)
+        bad = [line for line in needed.stdout.splitlines()
+               if "libfilmgrain" in line or "not found" in line]
+        if bad:
+            raise SystemExit("pip_install_check: FAIL: the CLI needs " + "; ".join(bad))
+        # The farm as a user runs it after `pip install`: no FILMGRAIN_BIN, the
+        # venv not on PATH; it must find the CLI beside itself.
+        farm_env = {k: v for k, v in env.items() if k != "FILMGRAIN_BIN"}
+        farm_env["PATH"] = "/usr/bin:/bin"
+        r, t_farm = run([os.path.join(venv, "bin", "filmgrain-farm"), "--workers", "1",
+                         "--wedge", "--filmgrain:stock=paper:width_mm=0.5", "-o",
+                         os.path.join(work, "farm_wedge.exr"), "-q"],
+                        env=farm_env, cwd=work, capture_output=True, text=True)
+        if not os.path.isfile(os.path.join(work, "farm_wedge.exr")):
+            raise SystemExit("pip_install_check: FAIL: filmgrain-farm wrote nothing: "
+                             + r.stderr)
+        print(f"filmgrain-farm with the installed CLI: {t_farm:.1f} s")
     except SystemExit:
         print(f"pip_install_check: work directory kept: {work}", file=sys.stderr)
         raise
