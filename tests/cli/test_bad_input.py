@@ -257,7 +257,7 @@ def test_broken_image(fg_bin, dirs, name, make, words):
 # Headers that declare absurd sizes: refused before anything is allocated
 # (peak memory of the whole process well under what one float plane of the
 # declared image would take). The CLI checks the header against its limits
-# (README "Limits and guarantees"): 2^20 pixels a side, 2^28 pixels.
+# (docs/reference.md "Limits and guarantees"): 2^20 pixels a side, 2^28 pixels.
 HUGE_CASES = [
     ("exr_1e6_square", lambda d: exr_declaring(exr(d), 1000000, 1000000)),
     ("exr_30000_square", lambda d: exr_declaring(exr(d), 30000, 30000)),

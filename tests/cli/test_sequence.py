@@ -1,5 +1,5 @@
 """Image sequences: --frames, frame patterns, per-frame grain, --skip-existing,
---skip-missing, and a sequence killed mid-frame (README "Sequences")."""
+--skip-missing, and a sequence killed mid-frame (docs/usage.md "Sequences")."""
 
 import json
 import os

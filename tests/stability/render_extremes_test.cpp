@@ -347,9 +347,9 @@ TEST(StabilityRender, DensityRisesWithExposure)
 }
 
 // Exposures beyond the model's limit (1e10 absorbed photons per mean grain,
-// README "Limits and guarantees") are refused with an error naming the
-// exposure; up to it a render finishes with saturated grains. (First
-// failure: the photon sampler's cast to uint64_t was undefined beyond
+// docs/reference.md "Limits and guarantees") are refused with an error
+// naming the exposure; up to it a render finishes with saturated grains.
+// (First failure: the photon sampler's cast to uint64_t was undefined beyond
 // 2^64: +64 stops on a grey pixel asked the chain for ~1e19 photons and
 // never finished, and a 1e30 pixel gave N = 0, fog only.)
 TEST(StabilityRender, HugeExposureSaturatesAndFinishes)

@@ -41,8 +41,8 @@ void expect_all_met(const std::vector<sm::Comparison>& comparisons, const std::s
 /// Measures a built-in stock against its datasheet: every figure within
 /// the tolerance, except exactly those named in `missed` (figures
 /// the model cannot reach, fit::model_limits, or that its fit did not: each
-/// stated in docs/stocks and the README), which must still miss, so that
-/// the list stays what the documents say.
+/// stated in docs/stocks/README.md and docs/stocks/built-in.md), which
+/// must still miss, so that the list stays what the documents say.
 void check_builtin(const std::string& preset, const std::string& sheet_file,
                    size_t expected_figures, const std::set<std::string>& missed = {})
 {
@@ -87,8 +87,8 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 // its range, D-min, granularity and reciprocity figure, and not the named
 // points of the datasheet's characteristic curve (0.1 density, our
 // tolerance: points in the toe, and 250D's green at log H -1.78, by
-// 0.10-0.12); the README
-// and docs/stocks say so.
+// 0.10-0.12); docs/stocks/built-in.md
+// and docs/stocks/README.md say so.
 TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
 {
     // speed, per layer D-min, slope and its halves, RMS at net 0.5 / 1 /

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""The pictures of docs/look (README, "Halation, scatter and inhibitors").
+"""The pictures of docs/look (its README.md, "Halation, scatter, adjacency
+and dye clouds").
 
 Renders the built-in look chart (filmgrain --chart) with `vision3-500t`
 (fitted to VISION3 500T's datasheet; its residual halation behind rem-jet,
