@@ -16,7 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // Input size limits, checked against the file's header before any pixel
-// is allocated (README "Limits and guarantees"). The input is read as
+// is allocated (docs/reference.md, "Limits and guarantees"). The input is read as
 // float: at the limits that is 8 GiB.
 constexpr int64_t kMaxInputSide   = int64_t(1) << 20;  ///< pixels a side (1048576)
 constexpr int64_t kMaxInputPixels = int64_t(1) << 28;  ///< pixels (268435456: 16384^2)

@@ -41,7 +41,7 @@ struct InputHeader {
 
 /// Opens `path` and chooses its part, view and channels (InputSelection);
 /// checks from the header alone, before any pixel is read, that it is a 2D
-/// non-deep image within the input limits (README, Limits and guarantees)
+/// non-deep image within the input limits (docs/reference.md, Limits and guarantees)
 /// and has the channels. Errors name the file, and when channels are
 /// missing, what each part has.
 Status read_input_header(const std::string& path, const InputSelection& selection,

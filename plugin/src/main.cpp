@@ -231,7 +231,7 @@ int print_stock(const std::string& name_or_path, const Console& con)
 // ---------------------------------------------------------------------------
 // Rendering stages.
 
-/// Output limits (README "Limits and guarantees"): the rendered region
+/// Output limits (docs/reference.md, "Limits and guarantees"): the rendered region
 /// (the ROI, else the whole scan) is allocated as floats, one per layer.
 constexpr int64_t kMaxOutputPixels = int64_t(1) << 28;
 constexpr int64_t kMaxOutputValues = int64_t(1) << 31;

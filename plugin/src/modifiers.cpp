@@ -445,7 +445,7 @@ const Modifier kModifiers[] = {
     { "seed", "N", "grain pattern: a whole number in [0, 2^64 - 1]",
       [](const FilmgrainCommand& d) { return std::to_string(d.scene.seed); }, parse_seed },
     { "frame", "N",
-      "frame number: the grain of frame N is seed's frame_seed(seed, N) (README \"Sequences\"), "
+      "frame number: the grain of frame N is seed's frame_seed(seed, N) (docs/usage.md, \"Sequences\"), "
       "so a frame rendered alone equals the same frame of a --frames sequence",
       [](const FilmgrainCommand& d) {
           return d.scene.frame ? std::to_string(*d.scene.frame)

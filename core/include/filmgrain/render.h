@@ -64,7 +64,7 @@ struct SceneSettings {
 /// The seed of frame `frame` of a sequence rendered with `seed`:
 /// hash_ids(seed, 0xf4a3e, frame) of core/src/rng.h, i.e. MurmurHash3's
 /// 64-bit finaliser chained over (seed, a constant naming the purpose,
-/// frame as a two's-complement 64-bit integer). Documented (README
+/// frame as a two's-complement 64-bit integer). Documented (docs/usage.md,
 /// "Sequences") so that other tools can reproduce a frame's grain.
 uint64_t frame_seed(uint64_t seed, int64_t frame);
 
