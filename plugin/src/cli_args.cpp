@@ -53,6 +53,19 @@ Status once(bool already, const char* flag)
     return {};
 }
 
+/// An option that names something: given at most once (`already`: it was
+/// given before), its value stored in `out` even on error, and an empty
+/// value refused as "FLAG: empty WHAT".
+Status set_once(bool already, const char* flag, const char* value, const char* what,
+                std::string& out)
+{
+    Status s = once(already, flag);
+    out      = value;
+    if (s && out.empty())
+        s = Status::errorf(flag, ": empty ", what);
+    return s;
+}
+
 Status parse_threads(const char* value, int& out)
 {
     const char* end = value + std::strlen(value);
@@ -120,42 +133,31 @@ const std::vector<OptionSpec>& option_table()
           "OCIO config for the input conversion, the regrain output and the preview (default: "
           "$OCIO, else the embedded config)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s      = once(!a.colorconfig.empty(), "--colorconfig");
-              a.colorconfig = v;
-              if (s && a.colorconfig.empty())
-                  s = Status::error("--colorconfig: empty file name");
-              return s;
+              return set_once(!a.colorconfig.empty(), "--colorconfig", v,
+                              "file name", a.colorconfig);
           } },
         { "--iscolorspace", nullptr, "NAME",
           "Colour space of INPUT (default: the file's oiio:ColorSpace when the config knows "
           "it, else an EXR's chromaticities (its primaries and white), else scene_linear)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s           = once(a.has_iscolorspace, "--iscolorspace");
+              const Status s = set_once(a.has_iscolorspace, "--iscolorspace", v,
+                                        "colour space name", a.iscolorspace);
               a.has_iscolorspace = true;
-              a.iscolorspace     = v;
-              if (s && a.iscolorspace.empty())
-                  s = Status::error("--iscolorspace: empty colour space name");
               return s;
           } },
         { "--subimage", nullptr, "N|NAME",
           "Part of a multi-part INPUT to read, by index (from 0) or name (as oiiotool's "
           "--subimage; default: the first part with the channels)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s = once(!a.input_selection.subimage.empty(), "--subimage");
-              a.input_selection.subimage = v;
-              if (s && a.input_selection.subimage.empty())
-                  s = Status::error("--subimage: empty part name");
-              return s;
+              return set_once(!a.input_selection.subimage.empty(), "--subimage", v,
+                              "part name", a.input_selection.subimage);
           } },
         { "--view", nullptr, "NAME",
           "View of a multi-view INPUT to read (default: the file's default view, the first it "
           "lists)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s               = once(!a.input_selection.view.empty(), "--view");
-              a.input_selection.view = v;
-              if (s && a.input_selection.view.empty())
-                  s = Status::error("--view: empty view name");
-              return s;
+              return set_once(!a.input_selection.view.empty(), "--view", v,
+                              "view name", a.input_selection.view);
           } },
         { "--ch", nullptr, "R,G,B|Y",
           "Channels of INPUT to read as red, green and blue, or one as grey, by name (as "
@@ -169,11 +171,9 @@ const std::vector<OptionSpec>& option_table()
           "Colour space of the output=regrain positive (default: the config's scene_linear); "
           "only with output=regrain",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s          = once(a.has_ocolorspace, "--ocolorspace");
+              const Status s = set_once(a.has_ocolorspace, "--ocolorspace", v,
+                                        "colour space name", a.ocolorspace);
               a.has_ocolorspace = true;
-              a.ocolorspace     = v;
-              if (s && a.ocolorspace.empty())
-                  s = Status::error("--ocolorspace: empty colour space name");
               return s;
           } },
         { "--filmgrain", nullptr, "",
@@ -216,11 +216,7 @@ const std::vector<OptionSpec>& option_table()
           "name.#.exr, name.@@@.exr, name.%04d.exr); frame N's grain is frame=N's (see "
           "Sequences below). Default: none (one image)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s = once(!a.frames.empty(), "--frames");
-              a.frames = v;
-              if (s && a.frames.empty())
-                  s = Status::error("--frames: empty frame list");
-              return s;
+              return set_once(!a.frames.empty(), "--frames", v, "frame list", a.frames);
           } },
         { "--skip-existing", nullptr, "",
           "Sequences: skip a frame whose outputs exist and were made with the same settings "
@@ -249,20 +245,13 @@ const std::vector<OptionSpec>& option_table()
         { "--stats", nullptr, "FILE.json",
           "Also write render statistics as JSON (timings, grain counts, input pixels)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s     = once(!a.stats_path.empty(), "--stats");
-              a.stats_path = v;
-              if (s && a.stats_path.empty())
-                  s = Status::error("--stats: empty file name");
-              return s;
+              return set_once(!a.stats_path.empty(), "--stats", v, "file name", a.stats_path);
           } },
         { "--preview", nullptr, "FILE.png",
           "Also write an 8-bit sRGB PNG positive for viewing (see Preview below)",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s       = once(!a.preview_path.empty(), "--preview");
-              a.preview_path = v;
-              if (s && a.preview_path.empty())
-                  s = Status::error("--preview: empty file name");
-              return s;
+              return set_once(!a.preview_path.empty(), "--preview", v,
+                              "file name", a.preview_path);
           } },
         { "--threads", nullptr, "N",
           "Worker threads (default: 0 = all hardware threads)",
@@ -286,11 +275,8 @@ const std::vector<OptionSpec>& option_table()
         { "--print-stock", nullptr, "NAME|FILE",
           "Print a stock (preset or file) as complete JSON, every key resolved, and exit",
           [](CliArgs& a, const std::string&, const char* v) {
-              Status s      = once(!a.print_stock.empty(), "--print-stock");
-              a.print_stock = v;
-              if (s && a.print_stock.empty())
-                  s = Status::error("--print-stock: empty stock name");
-              return s;
+              return set_once(!a.print_stock.empty(), "--print-stock", v,
+                              "stock name", a.print_stock);
           } },
         { "--version", nullptr, "", "Print the version and exit",
           [](CliArgs& a, const std::string&, const char*) {
