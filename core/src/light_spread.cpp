@@ -182,20 +182,21 @@ class SquareMoments {
 public:
     SquareMoments(const BaseHalation& base, double pitch_um)
         : m_base(base)
-        , m_p(pitch_um)
-        , m_ring(base.critical_radius_um())
-        , m_cut(base.reach_um())
+        , m_pitch_um(pitch_um)
+        , m_ring_um(base.critical_radius_um())
+        , m_cut_um(base.reach_um())
         , m_rule(gauss_legendre_01(16))
     {
     }
 
     /// Adds to m the moments over [x0, x0 + h] x [y0, y0 + h] (x0, y0 >= 0)
-    /// of the pixel square whose corner is (ax, ay).
+    /// of the pixel square whose corner is (ax, ay); every length in um,
+    /// from the kernel's centre.
     void add(double ax, double ay, double x0, double y0, double h, std::array<double, 4>& m) const
     {
         const double dmin = std::sqrt(x0 * x0 + y0 * y0);
         const double dmax = std::sqrt((x0 + h) * (x0 + h) + (y0 + h) * (y0 + h));
-        if (dmin >= m_cut)
+        if (dmin >= m_cut_um)
             return;
         if (h > kBaseLeafOfScale * std::max(m_base.thickness_um(), dmin)) {
             const double q = 0.5 * h;
@@ -205,8 +206,8 @@ public:
         }
         // Inside the critical circle R's slope grows without bound towards
         // it: squares near it from inside take the polar rule too.
-        const bool kink = dmin < m_ring && m_ring < dmax + kKinkSquares * h;
-        if (kink || m_cut < dmax) {
+        const bool kink = dmin < m_ring_um && m_ring_um < dmax + kKinkSquares * h;
+        if (kink || m_cut_um < dmax) {
             polar(ax, ay, x0, y0, h, m_rule, m);
             return;
         }
@@ -225,7 +226,7 @@ private:
     void accumulate(double ax, double ay, double x, double y, double f,
                     std::array<double, 4>& m) const
     {
-        const double xi = (x - ax) / m_p, eta = (y - ay) / m_p;
+        const double xi = (x - ax) / m_pitch_um, eta = (y - ay) / m_pitch_um;
         m[0] += f * (1.0 - xi) * (1.0 - eta);
         m[1] += f * xi * (1.0 - eta);
         m[2] += f * (1.0 - xi) * eta;
@@ -240,7 +241,7 @@ private:
         std::vector<double> at { lo, hi, std::atan2(y1, x1) };
         if (x0 > 0.0 || y0 > 0.0)
             at.push_back(std::atan2(y0, x0));
-        for (double rho : { m_ring, m_cut }) {
+        for (double rho : { m_ring_um, m_cut_um }) {
             if (!std::isfinite(rho))
                 continue;
             for (double x : { x0, x1 })
@@ -268,7 +269,7 @@ private:
                 const double wphi = rule.w[k] * (b - a) * 6.0 * t * (1.0 - t);
                 const double c = std::cos(phi), s = std::sin(phi);
                 const double r_in  = std::max(x0 > 0.0 ? x0 / c : 0.0, y0 > 0.0 ? y0 / s : 0.0);
-                const double r_out = std::min({ x1 / c, y1 / s, m_cut });
+                const double r_out = std::min({ x1 / c, y1 / s, m_cut_um });
                 if (!(r_out > r_in))
                     continue;
                 // r dr dphi: the area element.
@@ -276,14 +277,15 @@ private:
                     accumulate(ax, ay, r * c, r * s, weight * r * m_base.density_per_um2(r), m);
                 };
                 const double split
-                    = std::isfinite(m_ring) ? std::clamp(m_ring, r_in, r_out) : r_out;
+                    = std::isfinite(m_ring_um) ? std::clamp(m_ring_um, r_in, r_out) : r_out;
                 if (split > r_in) {
-                    if (std::isfinite(m_ring)) {
+                    if (std::isfinite(m_ring_um)) {
                         // r = r_c - q^2 on [r_in, split]: dr = 2 q dq.
-                        const double q0 = std::sqrt(m_ring - split), q1 = std::sqrt(m_ring - r_in);
+                        const double q0 = std::sqrt(m_ring_um - split);
+                        const double q1 = std::sqrt(m_ring_um - r_in);
                         for (size_t i = 0; i < rule.x.size(); ++i) {
                             const double q = q0 + (q1 - q0) * rule.x[i];
-                            at_r(m_ring - q * q, wphi * rule.w[i] * (q1 - q0) * 2.0 * q);
+                            at_r(m_ring_um - q * q, wphi * rule.w[i] * (q1 - q0) * 2.0 * q);
                         }
                     } else {
                         for (size_t i = 0; i < rule.x.size(); ++i)
@@ -300,7 +302,7 @@ private:
     }
 
     const BaseHalation& m_base;
-    double m_p, m_ring, m_cut;
+    double m_pitch_um, m_ring_um, m_cut_um;
     GaussRule m_rule;
 };
 
@@ -533,10 +535,10 @@ PixelKernel halation_pixel_kernel(HalationKernel kernel, double radius_um, doubl
 PixelKernel base_halation_pixel_kernel(const BaseHalation& base, double pitch_um,
                                        int64_t max_reach)
 {
-    const double p   = pitch_um;
-    const double cut = base.reach_um();
+    const double p      = pitch_um;
+    const double cut_um = base.reach_um();
     PixelKernel k;
-    k.reach = std::min<int64_t>(static_cast<int64_t>(std::ceil(cut / p)) + 1,
+    k.reach = std::min<int64_t>(static_cast<int64_t>(std::ceil(cut_um / p)) + 1,
                                 std::max<int64_t>(max_reach, 0));
     const int64_t R = k.reach, n = 2 * R + 1;
     // The weight of offset (i, j) is the integral of K against the tent
