@@ -44,17 +44,17 @@
 #include <memory>
 #include <vector>
 
-#include "develop_curve.h"
-#include "development.h"
-#include "exposure.h"
-#include "geometry.h"
-#include "grain_kernel.h"
-#include "image_formation.h"
-#include "kinetics.h"
-#include "kinetics_table.h"
-#include "pixel_model.h"
-#include "rng.h"
-#include "sampling.h"
+#include "expect/develop_curve.h"
+#include "model/development.h"
+#include "model/exposure.h"
+#include "model/geometry.h"
+#include "kernels/grain_kernel.h"
+#include "model/image_formation.h"
+#include "model/kinetics.h"
+#include "engine/kinetics_table.h"
+#include "kernels/pixel_model.h"
+#include "util/rng.h"
+#include "util/sampling.h"
 
 namespace filmgrain {
 namespace {

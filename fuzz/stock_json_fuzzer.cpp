@@ -1,4 +1,4 @@
-// libFuzzer target: parse_stock_json (MODEL.md 6, core/src/stock.cpp) on
+// libFuzzer target: parse_stock_json (MODEL.md 6, core/src/model/stock.cpp) on
 // arbitrary bytes. Besides the sanitizers (memory errors, undefined
 // behaviour, uncaught exceptions, stack overflow), it checks the parser's
 // contract on every input:

@@ -27,7 +27,7 @@ def mix64(x):
 
 def frame_seed(seed, frame):
     """The documented per-frame seed, written out independently of the C++:
-    hash_ids(seed, 0xf4a3e, frame) of core/src/rng.h."""
+    hash_ids(seed, 0xf4a3e, frame) of core/src/util/rng.h."""
     h = mix64(seed ^ 0x5851F42D4C957F2D)
     for v in (0xF4A3E, frame & MASK):
         h = mix64(h ^ ((mix64(v) + 0x9E3779B97F4A7C15 + ((h << 6) & MASK) + (h >> 2)) & MASK))

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "boolean_model.h"
-#include "expected_curve_model.h"
+#include "expect/expected_curve_model.h"
 
 namespace filmgrain::sensitometry {
 namespace {

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "analysis.h"
-#include "development.h"
+#include "model/development.h"
 #include "strip.h"
 #include "test_support.h"
 

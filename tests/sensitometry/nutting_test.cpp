@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "boolean_model.h"
-#include "development.h"
-#include "expectations.h"
+#include "model/development.h"
+#include "expect/expectations.h"
 #include "strip.h"
 #include "test_support.h"
 

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "light_spread.h"
+#include "model/light_spread.h"
 #include "test_support.h"
 
 namespace filmgrain::sensitometry {

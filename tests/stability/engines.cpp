@@ -14,7 +14,7 @@
 // when their headers and entry points are present in this checkout, so the
 // suite builds against any revision of core.
 #if __has_include("kinetics_table.h")
-#include "kinetics_table.h"
+#include "engine/kinetics_table.h"
 #define FILMGRAIN_STABILITY_HAS_TABLE 1
 #endif
 

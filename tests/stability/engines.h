@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "development.h"
-#include "kinetics.h"
-#include "rng.h"
+#include "model/development.h"
+#include "model/kinetics.h"
+#include "util/rng.h"
 
 namespace filmgrain::stability {
 

@@ -23,7 +23,7 @@
 
 #include "checks.h"
 #include "deadline.h"
-#include "exposure.h"
+#include "model/exposure.h"
 #include "filmgrain/render.h"
 
 namespace filmgrain::stability {

@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "rng.h"
-#include "sampling.h"
+#include "util/rng.h"
+#include "util/sampling.h"
 
 namespace filmgrain::stability {
 namespace {

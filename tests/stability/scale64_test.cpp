@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "checks.h"
-#include "expectations.h"
-#include "exposure.h"
+#include "expect/expectations.h"
+#include "model/exposure.h"
 #include "filmgrain/render.h"
 
 namespace filmgrain::stability {

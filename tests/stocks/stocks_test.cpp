@@ -11,7 +11,7 @@
 #include <cmath>
 #include <set>
 
-#include "dye.h"
+#include "model/dye.h"
 #include "fit.h"
 #include "filmgrain/render.h"
 

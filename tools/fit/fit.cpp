@@ -10,13 +10,13 @@
 
 #include <nlopt.hpp>
 
-#include "expected_curve_model.h"
+#include "expect/expected_curve_model.h"
 #include "analysis.h"
 #include "granularity.h"
-#include "parallel.h"
+#include "util/parallel.h"
 #include "patch.h"
 #include "strip.h"
-#include "rng.h"
+#include "util/rng.h"
 
 namespace filmgrain::fit {
 

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "dye.h"
+#include "model/dye.h"
 #include "fit.h"
 
 namespace sm = filmgrain::sensitometry;

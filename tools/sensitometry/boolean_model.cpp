@@ -8,12 +8,12 @@
 #include <cmath>
 #include <map>
 
-#include "development.h"
-#include "expectations.h"
-#include "exposure.h"
-#include "grain_counts.h"
-#include "kinetics.h"
-#include "pixel_model.h"
+#include "model/development.h"
+#include "expect/expectations.h"
+#include "model/exposure.h"
+#include "expect/grain_counts.h"
+#include "model/kinetics.h"
+#include "kernels/pixel_model.h"
 
 namespace filmgrain::sensitometry {
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "dye.h"
+#include "model/dye.h"
 #include "filmgrain/stock.h"
 #include "filmgrain/status.h"
 
@@ -38,7 +38,7 @@ struct PopulationDevelopment {
     double area2_developed_um4 = 0.0; ///< E[a^2 P]
     /// Monte Carlo standard error of E[a P] (from the P(develop | N) runs).
     double area_developed_se_um2 = 0.0;
-    /// A coupler-limited population's image (core/src/dye.h FilledImage;
+    /// A coupler-limited population's image (core/src/model/dye.h FilledImage;
     /// opacity 0: its images add).
     FilledImage filled;
 };
@@ -57,7 +57,7 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
 /// The Boolean model of one layer (MODEL.md 5 and 8): developed grains are
 /// a Poisson process of images, opaque discs (silver) or dye clouds. With
 /// B = sum over populations of n E[P(d) b(d/2)] and K(h) = sum of
-/// n E[P(d) k(d/2, h)] (b, k: ImageOverlap, core/src/dye.h; for silver
+/// n E[P(d) k(d/2, h)] (b, k: ImageOverlap, core/src/model/dye.h; for silver
 /// the disc area and the lens, the overlap area of two discs of radius r
 /// whose centres are h apart, so B = K(0)), the mean transmittance is
 /// T = exp(-B) and the covariance of the point transmittance at distance h
@@ -113,7 +113,7 @@ Status predict_layer(const Stock& stock, size_t layer, double exposure_lxs, doub
                      int max_samples, uint64_t seed, BooleanLayer& out, int min_samples = 16);
 
 /// The Boolean layer of one layer at exposure value v, from the pieces the
-/// core's expected curve is made of (core/src/expected_curve_model.h:
+/// core's expected curve is made of (core/src/expect/expected_curve_model.h:
 /// LayerModel::populations()): the one size quadrature (size_quadrature,
 /// |z| <= 9) and P(develop | mean photons) of the tabulated chain
 /// (pixel_develop_probability). No chain runs: for evaluating many

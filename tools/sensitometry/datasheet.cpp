@@ -14,8 +14,8 @@
 
 #include "analysis.h"
 #include "boolean_model.h"
-#include "expected_curve_model.h"
-#include "inhibition.h"
+#include "expect/expected_curve_model.h"
+#include "model/inhibition.h"
 
 namespace filmgrain::sensitometry {
 

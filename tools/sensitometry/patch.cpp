@@ -6,7 +6,7 @@
 #include <cmath>
 #include <thread>
 
-#include "light_spread.h"
+#include "model/light_spread.h"
 
 namespace filmgrain::sensitometry {
 
@@ -23,7 +23,7 @@ double patch_margin_um(const Stock& stock, double pitch_um)
 
 double patch_spread_reach_um(const Stock& stock)
 {
-    // The kernels' truncation (core/src/light_spread.h: 6 sigma; the base
+    // The kernels' truncation (core/src/model/light_spread.h: 6 sigma; the base
     // kernel's reach, where kBaseHalationTail of its light is cut) and
     // radius; inhibition blurs densities made from the spread exposure.
     double spread_um = 0.0;

@@ -28,7 +28,7 @@ struct MeasureSettings {
     Engine engine = Engine::exact;
     /// Kinetics override (with engine auto or fast). early_stop with disc
     /// exposure and exact coverage renders the exact engine's images bit for
-    /// bit, faster (core/src/render_test.cpp checks it).
+    /// bit, faster (core/src/engine/render_test.cpp checks it).
     std::optional<KineticsMethod> kinetics;
     /// Worker threads of each render; 0: all hardware threads.
     int nthreads = 0;

@@ -562,7 +562,7 @@ def summary(out, res):
              "diameters; the Boolean sigma_D at D = 0.3, 1 and 2; Nutting from D = 0.1 to 3; the "
              "paper stock's straight part of at least 0.6 log H. The tests use the exact engine's "
              "results computed faster: the chain stops once a grain's fate is decided, which renders "
-             "the exact engine's images bit for bit (core/src/render_test.cpp).")
+             "the exact engine's images bit for bit (core/src/engine/render_test.cpp).")
     L.append("")
     L.append("## Files")
     L.append("")

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "exposure.h"
-#include "rng.h"
+#include "model/exposure.h"
+#include "util/rng.h"
 
 namespace filmgrain::sensitometry {
 

@@ -62,7 +62,7 @@ struct SceneSettings {
 };
 
 /// The seed of frame `frame` of a sequence rendered with `seed`:
-/// hash_ids(seed, 0xf4a3e, frame) of core/src/rng.h, i.e. MurmurHash3's
+/// hash_ids(seed, 0xf4a3e, frame) of core/src/util/rng.h, i.e. MurmurHash3's
 /// 64-bit finaliser chained over (seed, a constant naming the purpose,
 /// frame as a two's-complement 64-bit integer). Documented (docs/usage.md,
 /// "Sequences") so that other tools can reproduce a frame's grain.
@@ -310,7 +310,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
                        const RenderSettings& settings, float* density, RenderStats* stats);
 
 /// The directory of the on-disk cache of P(develop | N) tables (kept for
-/// other processes; core/src/kinetics_table.h): $FILMGRAIN_CACHE_DIR if set
+/// other processes; core/src/engine/kinetics_table.h): $FILMGRAIN_CACHE_DIR if set
 /// ("" or "off": no disk cache), else $XDG_CACHE_HOME/filmgrain, else
 /// $HOME/.cache/filmgrain; "" when none (or when this build has no table
 /// code id). Read from the environment at every call.

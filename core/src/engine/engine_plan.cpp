@@ -1,0 +1,1331 @@
+// Choosing the paths of a render, once per layer.
+#include "engine/engine_plan.h"
+
+#include "kernels/grain_kernel.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "model/dye.h"
+#include "engine/path_cost.h"
+#include "expect/grain_counts.h"
+#include "model/inhibition.h"
+#include "model/light_spread.h"
+#include "util/parallel.h"
+#include "util/process_cache.h"
+#include "util/rng.h"
+#include "util/sampling.h"
+
+namespace filmgrain {
+
+namespace {
+
+/// What a table saves on each grain beyond its chain, in chain steps
+/// (events and photon arrivals, ~14 ns each): with P(develop | mean
+/// photons) a grain is decided by one uniform at its centre's exposure,
+/// without the disc integral of its exposure, the Poisson count and the
+/// chain's set-up. Measured on 32x24 frames, 2 threads, early-stopped chain
+/// against the fast kernel, per grain: color-negative 0.55 against 0.09 us
+/// (32 steps), vision3-500t 1.9 against 0.7 us (84 steps); the smaller is
+/// taken. (A table also opens the pixel scale, which saves every grain's
+/// cost; not counted.)
+constexpr double kTableSavedStepsPerGrain = 32.0;
+/// log10(e): Nutting's factor, D = 0.434 n a.
+constexpr double kLog10E = 0.43429448190325176;
+/// Sample rows (disc clouds) or points per axis (gaussian) per smallest
+/// mean cloud radius of a dye layer's image: the exact engine's, and the
+/// others'. Measured (core Dye.SamplingConverges, 12.5 um pixels, 3 um
+/// disc clouds): RMS per-pixel density difference from 64 rows per pixel
+/// 0.039 at 8 rows, 0.015 at 16.
+constexpr double kDyeSamplesPerRadiusExact = 8.0;
+constexpr double kDyeSamplesPerRadiusFast  = 2.0;
+/// Largest photon count a table covers; grains beyond run the chain
+/// (early_stop, exact). Keeps the build cost bounded for blown highlights.
+constexpr uint64_t kTablePhotonCap = uint64_t(1) << 12;
+/// Normal score of the largest grain a table must cover: grains above it
+/// (about one in 740) that also catch more photons than the table holds run
+/// the chain instead (early_stop, exact).
+constexpr double kTableAreaQuantileZ = 3.0;
+/// Exposure value a table covers (diffuse white, ~2.5 stops over grey):
+/// a property of the scene, not of the pixels, so that a ROI render uses
+/// the same table, and draws the same grains, as the full frame.
+constexpr double kTableTopValue = 1.0;
+
+/// The largest exposure value v of a layer over an input region, and where.
+struct RegionValues {
+    double max = 0.0;
+    int64_t max_x = 0, max_y = 0;
+};
+RegionValues region_values(const LayerExposure& ex, const InputRegion& r)
+{
+    RegionValues out;
+    for (int64_t y = r.y0; y < r.y1; ++y)
+        for (int64_t x = r.x0; x < r.x1; ++x) {
+            const double v = ex.value(x, y);
+            if (v > out.max) {
+                out.max   = v;
+                out.max_x = x;
+                out.max_y = y;
+            }
+        }
+    return out;
+}
+
+/// Chain steps (events and photon arrivals) per grain that the
+/// early-stopped chain (KineticsMethod::early_stop) spends on a population
+/// at the stock's grey exposure, estimated from a fixed pilot sample of 256
+/// grains: sizes from the population's distribution, photon counts, develop
+/// uniforms and chains drawn as the render draws them. The cost a table
+/// would save; deterministic (seeded), and a property of the stock and the
+/// scene, not of the pixels.
+double early_stop_steps_per_grain(const Population& pop, const KineticsRates& rates,
+                                   double photons_per_um2, double shutter_s,
+                                   const Development& dev, uint64_t key)
+{
+    constexpr int kPilotGrains = 256;
+    uint64_t steps = 0;
+    for (int i = 0; i < kPilotGrains; ++i) {
+        Rng draw(hash_ids(key, static_cast<uint64_t>(i)), Stage::photons);
+        const double u_dev = draw.uniform();
+        const uint64_t needed = dev.n4_needed(u_dev);
+        const double z     = std::clamp(normal_quantile(draw.uniform_open0()), -9.0, 9.0);
+        const double d_um  = diameter_at_z_um(pop, z);
+        const uint64_t n   = sample_poisson(photons_per_um2 * M_PI / 4.0 * d_um * d_um, draw);
+        if (needed == 0 || n < 4 || needed == std::numeric_limits<uint64_t>::max())
+            continue;
+        Rng chain(hash_ids(key, static_cast<uint64_t>(i)), Stage::kinetics);
+        uint64_t events = 0, arrivals = 0;
+        simulate_latent_image(n, shutter_s, rates, chain, &events, needed, &arrivals);
+        steps += events + arrivals;
+    }
+    return static_cast<double>(steps) / kPilotGrains;
+}
+
+/// A population of a layer that reads a table: its grains and its mean
+/// absorbed photons per (value x square micrometre).
+struct TableUser {
+    const Population* population;
+    double photons_per_value_um2;
+};
+
+/// Bound on the bias of a layer's patch-mean density caused by one table,
+/// read by `users` (populations of the layer), over uniform exposure
+/// values from `value_max` down 16 stops. A patch's density is
+/// D = 0.434 sum_pop n E[a P(N)] (MODEL.md 5), so a table error e(N) moves
+/// it by 0.434 sum_N W_N e(N), with W_N = sum_pop n E[a 1{N_g = N}] at the
+/// same exposure value: the populations read the same nodes. Node errors
+/// are independent Monte Carlo errors: their sum has standard deviation
+/// sqrt(sum W_N^2 se_N^2), counted at 2 sigma; interpolation errors may all
+/// lean one way, so they add as W_N times the bound. Counts above the
+/// table run the chain.
+double table_density_error(const std::vector<TableUser>& users, const DevelopTable& table,
+                           double value_max)
+{
+    double worst = 0.0;
+    std::vector<double> w(static_cast<size_t>(table.max_photons()) + 1);
+    for (int k = 0; k <= 32; ++k) {
+        const double v = value_max * std::exp2(-0.5 * k);
+        std::fill(w.begin(), w.end(), 0.0);
+        double interp = 0.0;
+        for (const TableUser& u : users)
+            for_each_size_and_count(
+                *u.population, u.photons_per_value_um2 * v,
+                [&](size_t, double weight, double a, uint64_t n, double p) {
+                    const double x = u.population->grains_per_um2 * weight * a * p;
+                    w[static_cast<size_t>(n)] += x;
+                    if (!table.is_node(n))
+                        interp += x * table.max_interpolation_error();
+                },
+                table.max_photons());
+        double var = 0.0;
+        for (size_t n = 0; n < w.size(); ++n)
+            if (w[n] > 0.0) {
+                const double se = table.standard_error(n);
+                var += w[n] * w[n] * se * se;
+            }
+        worst = std::max(worst, kLog10E * (2.0 * std::sqrt(var) + interp));
+    }
+    return worst;
+}
+
+/// How auto shares its density error budget (tolerance): the tables (and
+/// the curves folded from them) are built for three quarters; raster
+/// coverage gets what the layer's tables and curves leave of the tolerance
+/// by their error bounds, and at least the last quarter.
+constexpr double kTableShare  = 0.75;
+constexpr double kRasterShare = 0.25;
+
+/// Developed grain centres per pixel, at zero exposure (fog), that the
+/// pixel scale needs (auto): below, the per-grain kernel runs. Measured
+/// against the per-grain kernel (docs/performance/pixel_scale*.md, 8 seeds
+/// of the wedge) at 3.9 and 5.2 (fine-color at 5.46 and 6.25 um pixels)
+/// and 26 (real-scale) developed per pixel at fog: mean density within its
+/// CI of the kernel's up to D = 2.2 (-0.004 +- 0.003 at D = 1.45 with 3.9),
+/// pixel density sd 3-8% low above D ~ 0.7. The floor is the smallest
+/// measured; fewer per pixel is not measured.
+constexpr double kMinDevelopedPerPixel = 3.9;
+
+/// How much larger the raster's bias is where grains are large against the
+/// pixel than on the colour wedge its model was measured on (smallest mean
+/// radius / pitch 1.5 / 6.25 = 0.24): the bias of the mean of pixel
+/// densities comes from the per-pixel sampling noise of the open area
+/// relative to it, which grows as a pixel holds fewer holes. Measured at
+/// 16 rows per radius: the paper wedge (radius / pitch 0.48) 4x the
+/// model, a natural image under 1.5 um pixels and paper's 6 um grains
+/// (2.0) 6.9x; (ratio / 0.24)^2 covers both (4x and 69x: conservative
+/// for the second), 1 below the calibration.
+double raster_size_factor(double pitch_um, double smallest_radius_um)
+{
+    constexpr double kCalibrationRadiusPerPitch = 0.24;
+    const double q = smallest_radius_um / pitch_um / kCalibrationRadiusPerPitch;
+    return std::max(1.0, q * q);
+}
+
+/// The bias model of raster_samples (below): the largest step bias of the
+/// mean of pixel densities with `rows` per pixel.
+double raster_bias(int rows, double pitch_um, double smallest_radius_um)
+{
+    const double rows_per_radius = rows * smallest_radius_um / pitch_um;
+    return 0.52 * raster_size_factor(pitch_um, smallest_radius_um)
+           * std::pow(rows_per_radius, -2.3);
+}
+
+/// Rows of raster coverage per pixel (its points across a pixel are 64):
+/// enough rows across the smallest mean grain radius for the tolerance, at
+/// most 256. The per-pixel sampling noise biases the mean of pixel
+/// densities (the log is convex), most where few points are uncovered.
+/// Measured on the colour wedge (6.25 um pixels, docs/performance): the
+/// largest step bias falls as (rows per radius)^-2.3 and is 0.0009 at 16
+/// rows per radius (raster_bias()), times raster_size_factor where grains
+/// are larger against the pixel; rows are chosen to keep it below
+/// `budget`, the density error the raster may add: rows per radius =
+/// (0.52 f / budget)^(1 / 2.3), 21 at 0.0005 (a quarter of the default
+/// tolerance) and f = 1, 13.4 at 0.0013. The fast engine takes 4 rows per
+/// radius, whatever the bias (~0.02-0.05).
+int raster_samples(double pitch_um, double smallest_radius_um, double budget, bool fast)
+{
+    const double f = raster_size_factor(pitch_um, smallest_radius_um);
+    const double rows_per_radius = fast ? 4.0 : std::pow(0.52 * f / budget, 1.0 / 2.3);
+    const double want = std::ceil(rows_per_radius * pitch_um / smallest_radius_um);
+    int rows = static_cast<int>(std::clamp(want, 1.0, 256.0));
+    // The bias model evaluated as error_estimate adds it (raster_bias):
+    // within the budget to the last bit, where the formula's rounding
+    // would leave it a hair above.
+    while (!fast && rows < 256 && raster_bias(rows, pitch_um, smallest_radius_um) > budget)
+        ++rows;
+    return rows;
+}
+
+/// shared_pixel_model's models (0.2 MB each without inhibition, ~5 MB with
+/// VISION3 500T's 27 log-factor rows).
+ProcessCache<std::string, PixelModel>& pixel_model_cache()
+{
+    static ProcessCache<std::string, PixelModel> cache(8);
+    return cache;
+}
+
+/// The layer's pixel model (PixelModel's arguments), built once per
+/// process for the same arguments: a sequence's frames share it, as they
+/// share their tables. It depends on the stock, scene and scan, never on
+/// the pixels, and is the same for any thread count, so a model from the
+/// cache is the one a new build would give. Keyed by the bytes of every
+/// value the build reads (each population's size law, density, coupler
+/// limit and photons per value, its table's serialization and its curve's
+/// extent, the image,
+/// the pitch, the log-factor range and the density clamp), compared in
+/// full.
+std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopulation>& pops,
+                                                     double px_um, double py_um,
+                                                     const Layer& layer,
+                                                     const ImageOverlap& image,
+                                                     double max_log_factor, int nthreads,
+                                                     double max_density)
+{
+    std::string key;
+    const auto put = [&key](auto v) {
+        key.append(reinterpret_cast<const char*>(&v), sizeof(v));
+    };
+    put(px_um);
+    put(py_um);
+    put(max_log_factor);
+    put(max_density);
+    put(static_cast<int>(layer.image));
+    put(static_cast<int>(layer.cloud_profile));
+    put(layer.cloud_diameter_ratio);
+    put(layer.cloud_density);
+    for (const PixelPopulation& p : pops) {
+        put(p.population->max_dye_density);
+        put(p.population->grains_per_um2);
+        put(p.population->diameter_um);
+        put(p.population->diameter_log_sigma);
+        put(p.photons_per_value_um2);
+        put(p.curve->lambda_max());
+        put(p.curve->node_count());
+        const std::string table = p.table->serialize();
+        put(table.size());
+        key += table;
+    }
+    if (std::shared_ptr<const PixelModel> kept = pixel_model_cache().find(key))
+        return kept;
+    auto model = std::make_shared<const PixelModel>(pops, px_um, py_um, image, max_log_factor,
+                                                    nthreads, max_density);
+    pixel_model_cache().put(std::move(key), model);
+    return model;
+}
+
+/// Whether every population of a layer runs the fast kernel's curve.
+bool all_curves(const LayerPlan& plan)
+{
+    return std::all_of(plan.populations.begin(), plan.populations.end(),
+                       [](const PopulationPlan& p) { return p.curve != nullptr; });
+}
+
+std::string format_g(double v)
+{
+    std::ostringstream o;
+    o.precision(3);
+    o << v;
+    return o.str();
+}
+
+/// The spread exposure of a layer (row by row over the whole frame) as a
+/// one-channel image: LayerExposure reads it with weight 1.
+ImageView spread_view(const std::vector<float>& values, const ImageView& input)
+{
+    ImageView v;
+    v.pixels   = values.data();
+    v.width    = input.frame_width();
+    v.height   = input.frame_height();
+    v.channels = 1;
+    return v;
+}
+
+}  // namespace
+
+size_t clear_pixel_model_cache() { return pixel_model_cache().clear(); }
+
+InputRegion input_region(const ImageView& input, const FrameGeometry& frame, const Roi& roi,
+                         double margin_um)
+{
+    const RectUm r  = frame.scan_rect(roi.x_begin, roi.y_begin, roi.x_end, roi.y_end);
+    const double p  = frame.input_pitch_um;
+    const auto clip = [](double v, int64_t n) {
+        return std::clamp<int64_t>(static_cast<int64_t>(std::clamp(std::floor(v), -1.0, 9e18)), 0, n);
+    };
+    InputRegion out;
+    out.x0 = clip((r.x0_um - margin_um) / p, input.frame_width());
+    out.x1 = clip((r.x1_um + margin_um) / p + 1, input.frame_width());
+    out.y0 = clip((r.y0_um - margin_um) / p, input.frame_height());
+    out.y1 = clip((r.y1_um + margin_um) / p + 1, input.frame_height());
+    return out;
+}
+
+namespace {
+
+/// The largest grain radius any population of the stock generates (times
+/// its clouds' reach on a dye layer, MODEL.md 8): the margin around a region
+/// within which grains can reach into it.
+double max_radius_um(const Stock& stock, const SceneSettings& scene)
+{
+    double r = 0.0;
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        for (size_t p = 0; p < stock.layers[l].populations.size(); ++p)
+            r = std::max(r, std::max(1.0, image_reach_factor(stock.layers[l]))
+                                * PopulationGrains(stock.layers[l].populations[p],
+                                                   grain_seed(scene), static_cast<uint32_t>(l),
+                                                   static_cast<uint32_t>(p))
+                                      .max_radius_um());
+    return r;
+}
+
+}  // namespace
+
+InputRegion read_region(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                        const FrameGeometry& frame, const Roi& roi)
+{
+    bool whole_frame = stock.inhibits();  // MODEL.md 10's blur: computed the same way
+    for (const Layer& layer : stock.layers)
+        whole_frame = whole_frame || layer.spreads_light();
+    if (whole_frame)
+        return InputRegion { 0, 0, input.frame_width(), input.frame_height() };
+    InputRegion r = input_region(input, frame, roi, 2.0 * max_radius_um(stock, scene));
+    if (scene.edge == FrameEdge::clamp) {
+        // Beyond the image the nearest edge pixels are read: a region past
+        // an edge holds them (MODEL.md 2).
+        r.x0 = std::min(r.x0, input.frame_width() - 1);
+        r.y0 = std::min(r.y0, input.frame_height() - 1);
+        r.x1 = std::max(r.x1, r.x0 + 1);
+        r.y1 = std::max(r.y1, r.y0 + 1);
+    }
+    return r;
+}
+
+namespace {
+
+/// What every chooser reads: the render's arguments and what follows from
+/// them alone.
+struct PlanContext {
+    PlanContext(const Stock& stock_, const SceneSettings& scene_, const ImageView& input_,
+                const FrameGeometry& frame_, const Roi& roi_, const RenderSettings& settings_,
+                const std::atomic<bool>* cancel_)
+        : stock(stock_)
+        , scene(scene_)
+        , input(input_)
+        , frame(frame_)
+        , roi(roi_)
+        , settings(settings_)
+        , cancel(cancel_)
+        , lxs_per_value(exposure_lxs_per_unit_value(stock_.exposure_at_grey_lxs,
+                                                    scene_.exposure_stops))
+        , exact(settings_.engine == Engine::exact)
+        , fast(settings_.engine == Engine::fast)
+        , forced_table(settings_.kinetics.has_value() || settings_.scale == ScaleMethod::pixel)
+        , development(stock_)
+        , region(read_region(stock_, scene_, input_, frame_, roi_))
+        , workers(parallel_workers(std::numeric_limits<int64_t>::max(), settings_.nthreads))
+    {
+    }
+
+    const Stock& stock;
+    const SceneSettings& scene;
+    const ImageView& input;
+    const FrameGeometry& frame;
+    const Roi& roi;
+    const RenderSettings& settings;
+    const std::atomic<bool>* cancel;
+    /// Exposure (lxs) per unit of input value (MODEL.md 2).
+    double lxs_per_value;
+    bool exact, fast;
+    /// A table asked for (kinetics=table or curve), or needed by
+    /// scale=pixel: built whatever it costs.
+    bool forced_table;
+    Development development;
+    /// The input pixels the render reads (read_region).
+    InputRegion region;
+    /// The render's worker threads (the cost estimates share work among
+    /// them).
+    int workers;
+
+    bool cancelled() const { return cancel_requested(cancel); }
+    /// Film area of the whole scan and of the ROI, square micrometres, and
+    /// their pixels: choices compare costs over the whole scan (so that a
+    /// ROI decides as the full frame does); estimates are of the ROI.
+    double frame_area_um2() const { return frame.width_um * frame.height_um; }
+    double frame_pixels() const
+    {
+        const Roi all = frame.frame_scan_pixels();
+        return static_cast<double>(all.width()) * static_cast<double>(all.height());
+    }
+    double roi_pixels() const { return static_cast<double>(roi.npixels()); }
+    double roi_area_um2() const
+    {
+        return roi_pixels() * frame.scan_pitch_x_um * frame.scan_pitch_y_um;
+    }
+};
+
+/// The smallest mean grain radius of a layer's populations.
+double smallest_mean_radius_um(const Layer& layer)
+{
+    double r_um = 1e300;
+    for (const Population& pop : layer.populations)
+        r_um = std::min(r_um, 0.5 * pop.diameter_um);
+    return r_um;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// ---- Light spread and inhibition (MODEL.md 9, 10): the exposure every
+// later choice reads.
+
+/// Layer l's exposure value straight from the input (MODEL.md 2), before
+/// any spread.
+LayerExposure direct_exposure(const PlanContext& c, size_t l)
+{
+    const Layer& layer = c.stock.layers[l];
+    return LayerExposure(c.input, layer.sensitivity, c.frame.input_pitch_um,
+                         saturation_value(layer, c.lxs_per_value), c.scene.edge);
+}
+
+/// The spread exposure of every layer that spreads light (null for the
+/// others), one layer per worker, and the seconds each took; each is a pure
+/// function of the layer and the whole input frame.
+struct SpreadLight {
+    std::vector<std::shared_ptr<const std::vector<float>>> values;
+    std::vector<double> seconds;
+};
+SpreadLight spread_light(const PlanContext& c)
+{
+    const size_t n = c.stock.layers.size();
+    SpreadLight out { std::vector<std::shared_ptr<const std::vector<float>>>(n),
+                      std::vector<double>(n, 0.0) };
+    std::vector<size_t> spreading;
+    for (size_t l = 0; l < n; ++l)
+        if (c.stock.layers[l].spreads_light())
+            spreading.push_back(l);
+    std::atomic<bool> stop { false };
+    parallel_for(static_cast<int64_t>(spreading.size()), c.settings.nthreads, stop,
+                 [&](int, int64_t i) {
+        if (c.cancelled())
+            return;
+        const auto t0      = std::chrono::steady_clock::now();
+        const size_t l     = spreading[static_cast<size_t>(i)];
+        const Layer& layer = c.stock.layers[l];
+        out.values[l]      = std::make_shared<const std::vector<float>>(spread_exposure(
+            c.stock, layer, direct_exposure(c, l), c.input.frame_width(),
+            c.input.frame_height(), c.frame.input_pitch_um));
+        out.seconds[l] = seconds_since(t0);
+    });
+    return out;
+}
+
+/// Each layer's exposure value: the spread one, or the input's, both
+/// saturating at the layer's saturation_value (MODEL.md 2: the spread
+/// light of a saturated pixel is that of the clamped value, and the spread
+/// exposure saturates as the direct one does).
+std::vector<LayerExposure> layer_exposures(const PlanContext& c, const SpreadLight& spread)
+{
+    std::vector<LayerExposure> exposures;
+    for (size_t l = 0; l < c.stock.layers.size(); ++l)
+        exposures.push_back(spread.values[l]
+                                ? LayerExposure(spread_view(*spread.values[l], c.input),
+                                                { 1.0, 0.0, 0.0 }, c.frame.input_pitch_um,
+                                                direct_exposure(c, l).max_value(), c.scene.edge)
+                                : direct_exposure(c, l));
+    return exposures;
+}
+
+/// Development inhibitors (MODEL.md 10), from the layers' exposures.
+Status plan_inhibitors(const PlanContext& c, const std::vector<LayerExposure>& exposures,
+                       InhibitionPlan& inhibition, double& seconds)
+{
+    if (!c.stock.inhibits())
+        return {};
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<const LayerExposure*> views;
+    for (const LayerExposure& e : exposures)
+        views.push_back(&e);
+    if (Status s = plan_inhibition(c.stock, c.scene, views, c.input.frame_width(),
+                                   c.input.frame_height(), c.frame.input_pitch_um,
+                                   c.settings.nthreads, inhibition, c.cancel);
+        !s)
+        return s;
+    seconds = seconds_since(t0);
+    return {};
+}
+
+// ---- A layer's grains, exposure (MODEL.md 1-2) and first coverage.
+
+/// The exposure chooser (MODEL.md 2): over each grain's disc, but at its
+/// centre in the fast engine, unless the settings say.
+ExposureMethod choose_exposure(const PlanContext& c)
+{
+    if (c.settings.exposure_method)
+        return *c.settings.exposure_method;
+    return c.fast ? ExposureMethod::centre : ExposureMethod::disc;
+}
+
+/// The coverage chooser (MODEL.md 5), before the kinetics are known: exact
+/// (scanlines in the fast engine) unless the settings say; the raster is
+/// chosen later, where every grain runs the kernel (choose_raster).
+/// Sub-scanlines are spaced by a fraction of the smallest mean grain radius
+/// (not of the pixel): the sampling error of a disc's area depends on how
+/// many chords cross it, so every grain is crossed by about
+/// 2 * chords_per_radius chords whatever the scan resolution. Auto keeps
+/// the exact coverage: scanline sampling is unbiased in mean transmittance
+/// but its per-pixel noise biases the mean of per-pixel densities (the log
+/// is convex), and exact coverage per block (grid_coverage) costs little
+/// more.
+void choose_first_coverage(const PlanContext& c, const Layer& layer, LayerPlan& plan)
+{
+    const double chords_per_radius = 2.0;
+    plan.coverage = c.fast ? CoverageMethod::scanline : CoverageMethod::exact;
+    plan.coverage_samples = static_cast<int>(std::clamp(
+        std::ceil(chords_per_radius * c.frame.scan_pitch_y_um / smallest_mean_radius_um(layer)),
+        1.0, 256.0));
+    if (c.settings.coverage)
+        plan.coverage = *c.settings.coverage;
+    if (c.settings.coverage_samples > 0)
+        plan.coverage_samples = c.settings.coverage_samples;
+}
+
+/// A layer's plan before its kinetics: its populations' grains and rates,
+/// how far their images reach, the exposure and first coverage methods.
+LayerPlan start_layer(const PlanContext& c, size_t l, const LayerExposure& exposure,
+                      double setup_seconds, std::shared_ptr<const std::vector<float>> spread,
+                      std::shared_ptr<const FramePlane> log_factor)
+{
+    const Layer& layer = c.stock.layers[l];
+    LayerPlan plan { exposure, {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0,
+                     setup_seconds, std::move(spread), std::move(log_factor) };
+    const ExposureMethod method = choose_exposure(c);
+    double margin_um            = 0.0;
+    for (size_t p = 0; p < layer.populations.size(); ++p) {
+        const Population& pop = layer.populations[p];
+        PopulationPlan pp { PopulationGrains(pop, grain_seed(c.scene), static_cast<uint32_t>(l),
+                                             static_cast<uint32_t>(p)),
+                            pop.quantum_efficiency * kPhotonsPerUm2PerLxs * c.lxs_per_value,
+                            { pop.k_pair_per_s, pop.k_join_per_s, pop.k_loss_per_s },
+                            pop.rate_area_exponent,
+                            KineticsMethod::chain,
+                            method,
+                            nullptr, nullptr, nullptr };
+        margin_um = std::max(margin_um, std::max(1.0, image_reach_factor(layer))
+                                            * pp.grains.max_radius_um());
+        plan.populations.push_back(std::move(pp));
+    }
+    plan.margin_um   = margin_um;
+    plan.image_reach = image_reach_factor(layer);
+    choose_first_coverage(c, layer, plan);
+    return plan;
+}
+
+// ---- Kinetics (MODEL.md 3-4): the chain, or a table of P(develop | N).
+
+/// A table depends only on the rates (the shutter and development are the
+/// scene's): populations with the same rates share one, built once for the
+/// largest photon count and the smallest error any of them needs.
+struct TableRequest {
+    KineticsRates rates;
+    DevelopTable::Options options;
+    std::shared_ptr<const DevelopTable> table;
+    double seconds = 0.0;
+    /// Chain steps the grains it serves would cost without it.
+    double grain_steps = 0.0;
+};
+/// A population that asked for a table: which request serves it, the
+/// largest exposure value of its layer's region, and whether its brightest
+/// grains pass the table's photon cap.
+struct TableNeed {
+    size_t layer, population, request;
+    double value_max;
+    bool capped;
+};
+struct TableRequests {
+    std::vector<TableRequest> requests;
+    std::vector<TableNeed> needs;
+};
+
+/// Asks for a table for population p of layer l, whose region's largest
+/// exposure value is v_max and whose exposure saturates at v_saturated.
+void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPlan& pp,
+                   double n_mean_area, double v_max, double v_saturated, TableRequests& tables)
+{
+    const Population& pop = c.stock.layers[l].populations[p];
+    // What the frame's grains would cost without a table, at grey (or at
+    // the saturated exposure, where grey lies past it: an exposure offset
+    // of many stops): their early-stopped chains, and the per-grain work
+    // the table saves. (The whole frame, and grey rather than the pixels:
+    // a ROI render must decide as the full frame does.) Not needed when
+    // the table is asked for explicitly.
+    const double pilot_value = std::min(kGreyValue, v_saturated);
+    const double steps
+        = c.forced_table
+              ? 0.0
+              : pop.grains_per_um2 * c.frame.width_um * c.frame.height_um
+                    * (early_stop_steps_per_grain(pop, pp.rates,
+                                                  pp.photons_per_value_um2 * pilot_value,
+                                                  c.scene.shutter_s, c.development,
+                                                  hash_ids(grain_seed(c.scene), 0x9170, l, p))
+                       + kTableSavedStepsPerGrain);
+    // The photon count of a grain short of the largest ones at the table's
+    // top value, plus 6 Poisson sigmas; brighter grains run the
+    // early-stopped chain (quickly decided: they develop).
+    const double d_q = diameter_at_z_um(pop, kTableAreaQuantileZ);
+    const double lam = pp.photons_per_value_um2 * kTableTopValue * M_PI / 4.0 * d_q * d_q;
+    const double n_need = lam + 6.0 * std::sqrt(lam) + 10.0;
+    // Budget: a node error e moves a patch density by at most
+    // 0.434 n E[a] e; nodes' errors partly average (estimated below).
+    const double target = std::max(c.fast ? 5e-3 : 0.0,
+                                   kTableShare * c.settings.tolerance / (kLog10E * n_mean_area));
+    // Rounded up to a power of two so that renders share tables
+    // (shared_develop_table). The table's stream is the same for every seed
+    // and frame (keyed by the rates' order only): a sequence's frames (and
+    // any seed) share one table, so the table's own error is the same on
+    // every frame (no flicker of mean density from frame to frame) and is
+    // paid once per process; frame_seed(seed, frame) still renders as the
+    // single image of that seed.
+    uint64_t n_max = 64;
+    while (n_max < n_need && n_max < kTablePhotonCap)
+        n_max *= 2;
+    std::vector<TableRequest>& requests = tables.requests;
+    size_t r = 0;
+    while (r < requests.size()
+           && !(requests[r].rates.k_pair_per_s == pp.rates.k_pair_per_s
+                && requests[r].rates.k_join_per_s == pp.rates.k_join_per_s
+                && requests[r].rates.k_loss_per_s == pp.rates.k_loss_per_s))
+        ++r;
+    if (r == requests.size()) {
+        TableRequest req;
+        req.rates                         = pp.rates;
+        req.options.max_photons           = n_max;
+        req.options.target_standard_error = target;
+        req.options.stream_key            = hash_ids(0x7ab1e, r);
+        req.options.nthreads              = c.settings.nthreads;
+        req.options.cancel                = c.cancel;
+        req.grain_steps                   = steps;
+        requests.push_back(req);
+    } else {
+        auto& o                 = requests[r].options;
+        o.max_photons           = std::max(o.max_photons, n_max);
+        o.target_standard_error = std::min(o.target_standard_error, target);
+        requests[r].grain_steps += steps;
+    }
+    tables.needs.push_back({ l, p, r, v_max, n_need > kTablePhotonCap });
+}
+
+/// The kinetics chooser, per population of layer l: the exact engine's
+/// chain; fog for a layer no light reaches (plan_unlit_layers); the
+/// early-stopped chain where no table can serve; else a table request
+/// (built or refused by build_tables). Whether light reaches the layer is
+/// read over the region the render reads (read_region), the same for
+/// every tile and, where the stock spreads light or inhibits, for every
+/// ROI. Its reasons go to plan.reason.
+Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableRequests& tables)
+{
+    const Layer& layer = c.stock.layers[l];
+    double n_mean_area = 0.0;
+    for (size_t p = 0; p < plan.populations.size(); ++p)
+        n_mean_area += layer.populations[p].grains_per_um2 * plan.populations[p].grains.mean_area_um2();
+    const RegionValues values = region_values(plan.exposure, c.region);
+    const bool unlit          = !(values.max > 0.0);
+    if (c.settings.kinetics == KineticsMethod::fog && !unlit)
+        return Status::errorf("kinetics=fog: light reaches layer '", layer.name,
+                              "' (input pixel (", values.max_x, ", ", values.max_y,
+                              ") gives it an exposure of ",
+                              format_g(values.max * c.lxs_per_value),
+                              " lxs): fog alone decides only layers that no light reaches");
+    if (unlit && !c.exact && (!c.settings.kinetics || c.settings.kinetics == KineticsMethod::fog)) {
+        plan.unlit = true;
+        for (PopulationPlan& pp : plan.populations)
+            pp.kinetics = KineticsMethod::fog;
+        return {};
+    }
+    std::ostringstream why;
+    for (size_t p = 0; p < plan.populations.size(); ++p) {
+        PopulationPlan& pp    = plan.populations[p];
+        const Population& pop = layer.populations[p];
+        if (c.exact) {
+            pp.kinetics = KineticsMethod::chain;
+            continue;
+        }
+        KineticsMethod want = c.settings.kinetics ? *c.settings.kinetics : KineticsMethod::table;
+        // The curve is built from the table: both ask for one.
+        if (want == KineticsMethod::curve)
+            want = KineticsMethod::table;
+        if (want == KineticsMethod::table && pop.rate_area_exponent != 0.0) {
+            want = KineticsMethod::early_stop;
+            why << "population " << p
+                << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
+                   "so no table: the chain runs until each outcome is decided; ";
+        }
+        pp.kinetics = want;
+        if (want == KineticsMethod::table)
+            request_table(c, l, p, pp, n_mean_area, values.max, plan.exposure.max_value(),
+                          tables);
+    }
+    plan.reason = why.str();
+    return {};
+}
+
+/// Builds the requested tables. A table is built only when it costs fewer
+/// chain steps (events and photon arrivals) than the frame's grains would
+/// spend in the early-stopped chain, which decides most grains within a
+/// few steps, and in the per-grain work the table saves
+/// (kTableSavedStepsPerGrain): otherwise that chain runs, with the exact
+/// engine's results and no error of its own. The decision depends on
+/// seeded pilots and the table's full cost only, never on which tables
+/// earlier renders left in the cache, nor on the ROI.
+Status build_tables(const PlanContext& c, TableRequests& tables)
+{
+    for (TableRequest& req : tables.requests) {
+        const auto t0 = std::chrono::steady_clock::now();
+        // kinetics=table asked for explicitly: built whatever it costs.
+        // Otherwise only when predicted to cost less than the chains it
+        // replaces, and stopped (deterministically) if it costs more than
+        // twice that after all.
+        const bool pays = c.forced_table
+                          || DevelopTable::predicted_steps(req.options, req.rates,
+                                                           c.scene.shutter_s, c.development)
+                                 <= req.grain_steps;
+        if (pays) {
+            if (!c.forced_table)
+                req.options.step_budget
+                    = static_cast<uint64_t>(std::clamp(2.0 * req.grain_steps, 1.0, 1e18));
+            req.table
+                = shared_develop_table(req.rates, c.scene.shutter_s, c.development, req.options);
+        }
+        // Setup time: the pilot, and the build when there is one.
+        req.seconds = seconds_since(t0);
+        if (c.cancelled())
+            return Status::error("render cancelled");
+    }
+    return {};
+}
+
+/// Gives each population that asked for a table its table (or the
+/// early-stopped chain where the table was refused), and the fast
+/// per-grain kernel's curve where it runs; adds their error bounds to the
+/// layers' error estimates. Returns, per layer, the tables' and curves'
+/// density error bounds over the exposures a table covers (to 16x (4
+/// stops) past where a mean-sized grain of its least sensitive reader has
+/// the table's largest count as its mean, and 16 stops below): what the
+/// raster's budget is sized from. The error estimate is over the region's
+/// exposures (for --stats); the bound depends on neither the region nor
+/// its pixels, so the raster's rows are the same for every ROI.
+std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tables,
+                                  std::vector<LayerPlan>& out)
+{
+    std::vector<double> kinetics_bound(out.size(), 0.0);
+    std::vector<bool> charged(tables.requests.size(), false);
+    std::vector<std::shared_ptr<const DevelopCurve>> curves(tables.requests.size());
+    // The populations of each layer that read each table, and the layer's
+    // region's largest exposure value.
+    struct Readers {
+        std::vector<TableUser> users;
+        double value_max = 0.0, bound_value = 0.0;
+    };
+    std::vector<std::vector<Readers>> readers(out.size(),
+                                              std::vector<Readers>(tables.requests.size()));
+    for (const TableNeed& need : tables.needs) {
+        LayerPlan& plan        = out[need.layer];
+        PopulationPlan& pp     = plan.populations[need.population];
+        const TableRequest& rq = tables.requests[need.request];
+        if (!charged[need.request]) {  // a shared table's time is charged once
+            plan.setup_seconds += rq.seconds;
+            charged[need.request] = true;
+        }
+        if (!rq.table || !rq.table->complete()
+            || (rq.options.step_budget && rq.table->total_steps() > rq.options.step_budget)) {
+            pp.kinetics = KineticsMethod::early_stop;
+            std::ostringstream why;
+            why << "population " << need.population
+                << ": a table of P(develop|N) would cost more chain steps than the ~"
+                << format_g(rq.grain_steps)
+                << " its grains need (their chains and the per-grain work a table saves): "
+                   "the chain runs until each outcome is decided; ";
+            plan.reason += why.str();
+            continue;
+        }
+        pp.table = rq.table;
+        const Population& pop = c.stock.layers[need.layer].populations[need.population];
+        Readers& r = readers[need.layer][need.request];
+        r.users.push_back({ &pop, pp.photons_per_value_um2 });
+        r.value_max = need.value_max;
+        if (pp.photons_per_value_um2 > 0.0)
+            r.bound_value = std::max(r.bound_value,
+                                     16.0 * static_cast<double>(pp.table->max_photons())
+                                         / (pp.grains.mean_area_um2() * pp.photons_per_value_um2));
+        // The fast per-grain kernel (P(develop | mean photons), one uniform
+        // per grain) wherever a table is built, unless the table itself
+        // was asked for.
+        if ((!c.settings.kinetics || *c.settings.kinetics == KineticsMethod::curve)
+            && c.settings.grains != GrainMethod::exact) {
+            if (!curves[need.request])
+                curves[need.request] = std::make_shared<const DevelopCurve>(*pp.table);
+            pp.kinetics = KineticsMethod::curve;
+            pp.curve    = curves[need.request];
+            pp.fast     = std::make_shared<const FastGrains>(pp.grains);
+            // Exposure: integrated over the disc, as the population's plan
+            // already says (from the tile's plane for grains up to an input
+            // pixel in radius, grain_kernel.h; the input image's integral
+            // for larger ones, 0.3-1.4 us each). Sampling larger grains at
+            // their centre instead was measured biased by -0.10 D (-0.27 on
+            // edges) on a natural image under 1.5 um input pixels and 6 um
+            // grains (docs/performance/README.md, "Grains larger than the
+            // input pixels, measured"). engine=fast samples the centre.
+            // A curve error e moves a patch density by at most 0.434 n E[a] e.
+            const double curve_bound = kLog10E * pop.grains_per_um2 * pp.grains.mean_area_um2()
+                                       * pp.curve->max_interpolation_error();
+            plan.error_estimate += curve_bound;
+            kinetics_bound[need.layer] += curve_bound;
+        }
+        std::ostringstream why;
+        why << "population " << need.population << ": P(develop|N) tabulated for N <= "
+            << pp.table->max_photons() << " (table " << need.request << ": "
+            << pp.table->node_count() << " nodes, " << pp.table->total_runs()
+            << " chain runs, largest node error " << format_g(pp.table->max_standard_error())
+            << ", interpolation " << format_g(pp.table->max_interpolation_error()) << ")"
+            << (need.capped ? "; brighter grains run the chain" : "");
+        if (pp.curve)
+            why << "; folded into P(develop|mean photons) for means <= "
+                << format_g(pp.curve->lambda_max()) << " (" << pp.curve->node_count()
+                << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
+                << "; radii from tabulated quantiles: relative error of the mean area "
+                << format_g(pp.fast->mean_area_relative_error()) << ")";
+        why << "; ";
+        plan.reason += why.str();
+    }
+    // Each table's bound over its readers in a layer. The region's
+    // estimate (--stats) is over a part of the bound's range, so capped by
+    // it: both take the largest of a grid of exposures, and a grid point of
+    // the region's may land nearer the peak by ~0.1%, which made
+    // error_estimate exceed the tolerance it was sized for.
+    for (size_t l = 0; l < out.size(); ++l)
+        for (size_t q = 0; q < tables.requests.size(); ++q) {
+            const Readers& r = readers[l][q];
+            if (r.users.empty())
+                continue;
+            const DevelopTable& table = *tables.requests[q].table;
+            const double bound        = table_density_error(r.users, table, r.bound_value);
+            out[l].error_estimate
+                += std::min(bound, table_density_error(r.users, table, r.value_max));
+            kinetics_bound[l] += bound;
+        }
+    return kinetics_bound;
+}
+
+/// grains=fast asked for without the curve: the kernel's grains with the
+/// population's own decisions (to measure the curve and the raster against
+/// exact decisions and coverage on the same grains).
+void choose_grains(const PlanContext& c, std::vector<LayerPlan>& out)
+{
+    if (c.settings.grains != GrainMethod::fast)
+        return;
+    for (LayerPlan& plan : out)
+        for (PopulationPlan& pp : plan.populations)
+            if (!pp.fast)
+                pp.fast = std::make_shared<const FastGrains>(pp.grains);
+}
+
+// ---- Layers no light reaches (MODEL.md 4 with n4 = 0: fog alone).
+
+/// Stream key of the fog's thinned grain processes (apart from the full
+/// processes' streams).
+constexpr uint64_t kFogGrainStream = 0xf06;
+
+/// A layer that no light reaches: every grain develops with probability f
+/// (MODEL.md 4: P = 1 - (1 - f)(1 - d)^0), independently, so its developed
+/// grains are the grain process thinned to f: a Poisson process of
+/// intensity f n with the same sizes, which each population here generates
+/// instead of the full one (every grain it generates develops; an
+/// inhibited layer keeps each with probability exp(-log factor), MODEL.md
+/// 10). Exact in distribution, at f times the grains. For the pixel scale
+/// (choose_scale compares its cost), P(develop | N) of the fog: a table of
+/// N <= 3, where the chain cannot build a 4-centre and P = f exactly, and
+/// its curve, exact at mean 0, the only exposure such a layer has.
+void plan_unlit_layers(const PlanContext& c, std::vector<LayerPlan>& out)
+{
+    std::shared_ptr<const DevelopTable> table;
+    std::shared_ptr<const DevelopCurve> curve;
+    const double f = c.development.fog_probability();
+    for (size_t l = 0; l < out.size(); ++l) {
+        LayerPlan& plan = out[l];
+        if (!plan.unlit)
+            continue;
+        if (!table) {
+            DevelopTable::Options fog;
+            fog.max_photons = 3;
+            fog.nthreads    = 1;
+            table = std::make_shared<const DevelopTable>(KineticsRates {}, c.scene.shutter_s,
+                                                         c.development, fog);
+            curve = std::make_shared<const DevelopCurve>(*table);
+        }
+        for (size_t p = 0; p < plan.populations.size(); ++p) {
+            PopulationPlan& pp = plan.populations[p];
+            Population thinned = c.stock.layers[l].populations[p];
+            thinned.grains_per_um2 *= f;
+            pp.grains = PopulationGrains(thinned, hash_ids(grain_seed(c.scene), kFogGrainStream),
+                                         static_cast<uint32_t>(l), static_cast<uint32_t>(p));
+            pp.table = table;
+            pp.curve = curve;
+            if (c.settings.grains != GrainMethod::exact)
+                pp.fast = std::make_shared<const FastGrains>(pp.grains);
+        }
+        std::ostringstream why;
+        why << "no light reaches the layer (every exposure value the render reads is 0; NaN and "
+               "negative values expose nothing): its grains develop by fog alone, P = f = "
+            << format_g(f)
+            << " each (MODEL.md 4), so only the developed ones are generated, the grain process "
+               "thinned to f (exact in distribution); ";
+        plan.reason += why.str();
+    }
+}
+
+/// Grains a layer's per-grain path generates per square micrometre: the
+/// fog's thinned processes for a layer no light reaches, else every grain.
+double generated_grains_per_um2(const PlanContext& c, size_t l, const LayerPlan& plan)
+{
+    double n = 0.0;
+    for (const Population& pop : c.stock.layers[l].populations)
+        n += pop.grains_per_um2;
+    return plan.unlit ? n * c.development.fog_probability() : n;
+}
+
+/// Estimated seconds of a layer's tiles grain by grain over `area_um2` and
+/// `pixels` (engine/path_cost.h).
+double grain_path_seconds(const PlanContext& c, size_t l, const LayerPlan& plan,
+                          double area_um2, double pixels)
+{
+    const bool fast = std::all_of(plan.populations.begin(), plan.populations.end(),
+                                  [](const PopulationPlan& pp) { return pp.fast != nullptr; });
+    const double grains = generated_grains_per_um2(c, l, plan) * area_um2;
+    const double per_grain = plan.unlit ? path_cost::kFogGrainSeconds
+                             : fast     ? path_cost::kFastGrainSeconds
+                                        : path_cost::kExactGrainSeconds;
+    return path_cost::shared_seconds(grains, per_grain, c.workers)
+           + path_cost::shared_seconds(pixels, path_cost::kGrainPixelSeconds, c.workers);
+}
+
+/// Estimated seconds of a layer's tiles at pixel scale over `pixels`.
+double pixel_path_seconds(const PlanContext& c, double pixels)
+{
+    return path_cost::shared_seconds(pixels, path_cost::kPixelSeconds, c.workers);
+}
+
+// ---- The developed grains' image (MODEL.md 5, 8).
+
+/// Dye layers (MODEL.md 8): their image is the mean of 10^-D over each
+/// pixel, sampled on rows (disc clouds: exact along each) or points
+/// (gaussian) spaced by a fraction of the smallest mean cloud radius. The
+/// tables' and curves' error bounds scale with the clouds' blocking area.
+void choose_dye_image(const PlanContext& c, std::vector<LayerPlan>& out)
+{
+    for (size_t l = 0; l < out.size(); ++l) {
+        const Layer& layer = c.stock.layers[l];
+        if (layer.image != LayerImage::dye)
+            continue;
+        LayerPlan& plan = out[l];
+        const double smallest_cloud_um = smallest_mean_radius_um(layer) * layer.cloud_diameter_ratio;
+        const double per_radius = c.exact ? kDyeSamplesPerRadiusExact : kDyeSamplesPerRadiusFast;
+        plan.dye_samples = static_cast<int>(std::clamp(
+            std::ceil(per_radius * std::max(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um)
+                      / smallest_cloud_um),
+            c.exact ? 4.0 : 2.0, c.exact ? 64.0 : 16.0));
+        if (c.settings.coverage_samples > 0)  // samples=N (not for exact: validated)
+            plan.dye_samples = c.settings.coverage_samples;
+        plan.error_estimate *= cloud_area_factor(layer);
+    }
+}
+
+/// The raster chooser: coverage of the per-grain layers whose grains all
+/// run the fast kernel (and of every layer of the fast engine) on a raster
+/// where its sampling resolves the grains, with rows for the tolerance the
+/// layer's tables and curves leave (kinetics_bound), and at least the
+/// raster's share; else the coverage chosen first.
+void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bound,
+                   std::vector<LayerPlan>& out)
+{
+    for (size_t l = 0; l < out.size() && !c.exact; ++l) {
+        LayerPlan& plan = out[l];
+        if (plan.dye_samples > 0 || plan.pixel_model)  // no coverage to choose
+            continue;
+        const double smallest_radius_um = smallest_mean_radius_um(c.stock.layers[l]);
+        const double budget = std::max(kRasterShare * c.settings.tolerance,
+                                       c.settings.tolerance - kinetics_bound[l]);
+        const double pitch_um = std::max(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um);
+        if (!c.settings.coverage && (all_curves(plan) || c.fast))
+            plan.coverage = CoverageMethod::raster;
+        if (plan.coverage != CoverageMethod::raster)
+            continue;
+        plan.coverage_samples = c.settings.coverage_samples > 0
+                                    ? c.settings.coverage_samples
+                                    : raster_samples(pitch_um, smallest_radius_um, budget, c.fast);
+        plan.error_estimate += raster_bias(plan.coverage_samples, pitch_um, smallest_radius_um);
+    }
+}
+
+// ---- Scale (MODEL.md 5 at pixel scale).
+
+/// The scale chooser: a layer whose grains all run the kernel is drawn
+/// from its pixel statistics where they describe it: pixel correlations
+/// that end within kMaxLag pixels (at most 1% of their sum beyond), and
+/// enough developed grains per pixel even at zero exposure (fog) for its
+/// skewed law (measured in docs/performance).
+Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
+                    std::vector<LayerPlan>& out)
+{
+    for (size_t l = 0; l < out.size() && !c.exact; ++l) {
+        LayerPlan& plan    = out[l];
+        const Layer& layer = c.stock.layers[l];
+        const bool curves  = all_curves(plan);
+        const std::optional<ScaleMethod>& asked = c.settings.scale;
+        if (asked == ScaleMethod::grain || (!asked && !curves))
+            continue;
+        // A layer no light reaches: its fog grains are exact and cost in
+        // proportion to the few that develop; the pixel scale is taken
+        // only where it is estimated cheaper over the whole scan (with
+        // its model's build), the same for every ROI.
+        if (plan.unlit && !asked) {
+            const double grains_s = grain_path_seconds(c, l, plan, c.frame_area_um2(),
+                                                       c.frame_pixels());
+            const double pixel_s  = path_cost::kPixelModelSeconds
+                                   + pixel_path_seconds(c, c.frame_pixels());
+            std::ostringstream cost;
+            cost << "whole scan estimated " << format_g(grains_s) << " s grain by grain (the "
+                 << "fog's grains), " << format_g(pixel_s) << " s at pixel scale (with its "
+                 << "model's build): ";
+            if (grains_s <= pixel_s) {
+                plan.reason += cost.str() + "grain by grain; ";
+                continue;
+            }
+            plan.reason += cost.str() + "the pixel scale where its statistics describe the "
+                                        "layer; ";
+        }
+        if (!curves)
+            return Status::errorf("scale=pixel: layer '", layer.name,
+                                  "' needs P(develop | mean photons) for every population, which "
+                                  "kinetics=chain|early|table, grains=exact and populations with "
+                                  "rate_area_exponent != 0 do not have: use scale=grain");
+        // Each developed grain's image (MODEL.md 5 or 8): its blocking area
+        // and overlap enter the statistics and make the pixel correlations.
+        const ImageOverlap image(layer);
+        double median_range_um = 0.0;
+        for (const PopulationPlan& pp : plan.populations)
+            median_range_um = std::max(median_range_um,
+                                       image.correlation_range_um(pp.grains.radius_at_z_um(0.0)));
+        const double pitch_um = std::min(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um);
+        // Cheap refusals first (auto): a median grain's image reaching past
+        // the lags kept, or too few developed grains at fog.
+        if (!asked && median_range_um > (kMaxLag + 1) * pitch_um)
+            continue;
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<PixelPopulation> pops;
+        for (size_t p = 0; p < plan.populations.size(); ++p)
+            pops.push_back({ &layer.populations[p], &plan.populations[p].grains,
+                             plan.populations[p].photons_per_value_um2,
+                             plan.populations[p].curve.get(), plan.populations[p].table.get() });
+        const double fog_grains = PixelModel::compute(pops, c.frame.scan_pitch_x_um,
+                                                      c.frame.scan_pitch_y_um, 0.0, image)
+                                      .developed_per_pixel;
+        if (!asked && fog_grains < kMinDevelopedPerPixel)
+            continue;
+        // An inhibited layer (MODEL.md 10): its statistics over the log
+        // factor too, up to the stock's bound on it.
+        const double max_log_factor = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
+        auto model = shared_pixel_model(pops, c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um,
+                                        layer, image, max_log_factor, c.settings.nthreads,
+                                        c.stock.max_density);
+        plan.setup_seconds += seconds_since(t0);
+        if (c.cancelled())
+            return Status::error("render cancelled");
+        if (model->lags() < 0) {
+            if (!asked)
+                continue;
+            return Status::errorf("scale=pixel: layer '", layer.name,
+                                  "': its pixels' correlations reach beyond ", kMaxLag,
+                                  " pixels (", format_g(100.0 * model->max_dropped_correlation()),
+                                  "% of their sum left out there: grains or clouds too large "
+                                  "for ", format_g(pitch_um), " um pixels): use scale=grain");
+        }
+        plan.pixel_model = std::move(model);
+        plan.pixel_key   = hash_ids(grain_seed(c.scene), 0x9133, l);
+        plan.dye_samples = 0;  // no per-grain image
+        const PixelModel& pm = *plan.pixel_model;
+        // The table's interpolation error of the mean transmittance, as
+        // density.
+        plan.error_estimate += kLog10E * pm.max_mean_error();
+        std::ostringstream why;
+        why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
+            << " in " << format_g(pitch_um) << " um pixels, " << format_g(fog_grains)
+            << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
+               "(interpolation error: mean "
+            << format_g(pm.max_mean_error()) << ", sd " << format_g(pm.max_sd_error())
+            << "), two Gamma laws (covered and open part) weighted by the mean through a "
+               "Gaussian copula with the correlations to "
+            << pm.lags()
+            << " pixels each way (" << format_g(100.0 * pm.max_dropped_correlation())
+            << "% of their sum beyond; its filter on " << filter_lags(pm.lags())
+            << " lags, correlation error " << format_g(pm.max_copula_error()) << ")"
+            << (plan.inhibition ? ", every P thinned by the inhibitors' factor at the pixel's "
+                                  "centre (tabulated to log factor "
+                                      + format_g(max_log_factor) + ")"
+                                : "")
+            << "; ";
+        plan.reason += why.str();
+    }
+    return {};
+}
+
+// ---- What the plan says (--stats: path, reason).
+
+/// The path and reason of what acts before the grains: light spread,
+/// inhibition, a dye image.
+void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
+                          const InhibitionPlan& inhibition, std::ostringstream& path,
+                          std::ostringstream& why)
+{
+    const Layer& layer = c.stock.layers[l];
+    if (plan.spread) {
+        path << "spread=fft ";
+        why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
+            << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
+            << " " << halation_kernel_name(layer.halation_kernel);
+        if (layer.halation_kernel == HalationKernel::base)
+            why << " (a " << format_g(c.stock.base_thickness_um) << " um base of index "
+                << format_g(c.stock.base_refractive_index) << ", rear face "
+                << rear_face_name(c.stock.rear_face) << ", reach "
+                << format_g(layer_halation(c.stock, layer).reach_um()) << " um)";
+        else
+            why << " radius " << format_g(layer.halation_radius_um) << " um";
+        why << ") over the whole frame, by its exact mean over each input pixel; ";
+    }
+    if (plan.inhibition) {
+        path << "inhibition ";
+        why << "development inhibited (MODEL.md 10: inhibitor diffusion "
+            << format_g(c.stock.inhibitor_diffusion_um)
+            << " um; expected densities from the expected curves, error of the log factor <= "
+            << format_g(inhibition.error) << "); ";
+    }
+    if (layer.image == LayerImage::dye) {
+        // MODEL.md 8: per grain, the mean of 10^-D over each pixel; at
+        // pixel scale, the clouds' blocking area and overlap.
+        path << "image=dye";
+        why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
+            << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
+            << format_g(layer.cloud_density) << "): ";
+        std::string limited;  // docs/model.md: coupler-limited populations
+        for (size_t p = 0; p < layer.populations.size(); ++p)
+            if (layer.populations[p].coupler_limited())
+                limited += (limited.empty() ? "" : ", ") + std::to_string(p) + " at "
+                           + format_g(layer.populations[p].max_dye_density);
+        if (!limited.empty())
+            why << "coupler-limited populations " << limited
+                << " (their clouds fill to that density, docs/model.md); ";
+        if (plan.dye_samples > 0) {
+            path << ":" << plan.dye_samples;
+            why << "10^-D "
+                << (layer.cloud_profile == CloudProfile::disc ? "exact along " : "sampled at ")
+                << plan.dye_samples
+                << (layer.cloud_profile == CloudProfile::disc
+                        ? " rows"
+                        : "x" + std::to_string(plan.dye_samples) + " points")
+                << " per pixel (per-pixel density error measured in core "
+                   "Dye.SamplingConverges, not in the error estimate); ";
+        } else {
+            why << "their blocking area and overlap in the pixel statistics; ";
+        }
+        path << " ";
+    }
+}
+
+/// The path and reason of the per-grain pipeline: kinetics, grains,
+/// exposure and coverage.
+void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostringstream& path,
+                         std::ostringstream& why)
+{
+    path << "kinetics=";
+    for (size_t p = 0; p < plan.populations.size(); ++p)
+        path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
+    const ExposureMethod exposure = plan.populations.front().exposure;
+    const bool mixed = std::any_of(plan.populations.begin(), plan.populations.end(),
+                                   [&](const PopulationPlan& pp) { return pp.exposure != exposure; });
+    if (plan.populations.front().fast)
+        path << " grains=fast";
+    if (!plan.unlit) {  // a layer no light reaches reads no exposure
+        path << " exposure=";
+        if (mixed)  // per population, as kinetics
+            for (size_t p = 0; p < plan.populations.size(); ++p)
+                path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
+        else
+            path << exposure_method_name(exposure);
+    }
+    if (plan.dye_samples == 0)  // a dye layer's image is above, not a coverage
+        path << " coverage=" << coverage_method_name(plan.coverage);
+    if (plan.dye_samples == 0
+        && (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster))
+        path << ":" << plan.coverage_samples;
+    if (c.exact) {
+        why << "the reference engine: every photon, each chain until its grain is decided, "
+            << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
+        return;
+    }
+    // A layer no light reaches reads no exposure.
+    if (!plan.unlit && (exposure == ExposureMethod::centre || mixed))
+        why << "exposure sampled at grain centres"
+            << (mixed ? " for the populations above marked so" : "")
+            << " (error at image edges, measured in docs/); ";
+    if (!plan.unlit && exposure == ExposureMethod::disc
+        && std::any_of(plan.populations.begin(), plan.populations.end(),
+                       [](const PopulationPlan& pp) { return pp.fast != nullptr; }))
+        why << "exposure integrated over each grain's disc (the kernel's: segment "
+               "areas tabulated to "
+            << format_g(SegmentTable::shared().max_error()) << " of r^2, float exposure values); ";
+    if (plan.coverage == CoverageMethod::scanline)
+        why << "coverage on " << plan.coverage_samples
+            << " sub-scanlines per pixel row (unbiased in the mean transmittance, noisy "
+               "per pixel); ";
+    if (plan.coverage == CoverageMethod::raster)
+        why << "coverage at 64x" << plan.coverage_samples
+            << " points per pixel (unbiased in the mean transmittance, noisy per pixel: "
+               "its bias of the mean of pixel densities, modelled from docs/performance, "
+               "is in the error estimate); ";
+    why << "error estimate = patch-mean density bias bound at 2 sigma from the tables, "
+           "plus the raster's modelled bias";
+}
+
+/// Every layer's path and the whole of its reason.
+void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vector<LayerPlan>& out)
+{
+    for (size_t l = 0; l < out.size(); ++l) {
+        LayerPlan& plan = out[l];
+        std::ostringstream path, why;
+        describe_layer_image(c, l, plan, inhibition, path, why);
+        if (plan.pixel_model) {
+            path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve exposure=box");
+            plan.path   = path.str();
+            plan.reason = why.str() + plan.reason;
+            continue;
+        }
+        describe_grain_path(c, plan, path, why);
+        plan.path = path.str();
+        plan.reason += why.str();
+    }
+}
+
+}  // namespace
+
+Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageView& input,
+                   const FrameGeometry& frame, const Roi& roi, const RenderSettings& settings,
+                   std::vector<LayerPlan>& out, const std::atomic<bool>* cancel)
+{
+    out.clear();
+    const PlanContext c(stock, scene, input, frame, roi, settings, cancel);
+
+    // The exposure every later choice reads (MODEL.md 9, 10).
+    const SpreadLight spread = spread_light(c);
+    if (c.cancelled())
+        return Status::error("render cancelled");
+    const std::vector<LayerExposure> exposures = layer_exposures(c, spread);
+    InhibitionPlan inhibition;
+    double inhibition_seconds = 0.0;
+    if (Status s = plan_inhibitors(c, exposures, inhibition, inhibition_seconds); !s)
+        return s;
+
+    // Grains, exposure, first coverage and kinetics, layer by layer (tables
+    // requested in that order: their streams are keyed by it).
+    TableRequests tables;
+    for (size_t l = 0; l < stock.layers.size(); ++l) {
+        LayerPlan plan = start_layer(
+            c, l, exposures[l], spread.seconds[l] + inhibition_seconds / stock.layers.size(),
+            spread.values[l], inhibition.log_factor.empty() ? nullptr : inhibition.log_factor[l]);
+        if (Status s = choose_kinetics(c, l, plan, tables); !s)
+            return s;
+        out.push_back(std::move(plan));
+    }
+    if (Status s = build_tables(c, tables); !s)
+        return s;
+    const std::vector<double> kinetics_bound = attach_tables(c, tables, out);
+    plan_unlit_layers(c, out);
+    choose_grains(c, out);
+    choose_dye_image(c, out);
+    // The pixel scale first: a layer drawn from its pixel statistics has
+    // no coverage, and its error estimate no raster bias.
+    if (Status s = choose_scale(c, inhibition, out); !s)
+        return s;
+    choose_raster(c, kinetics_bound, out);
+    for (size_t l = 0; l < out.size(); ++l)
+        out[l].estimated_seconds
+            = out[l].pixel_model ? pixel_path_seconds(c, c.roi_pixels())
+                                 : grain_path_seconds(c, l, out[l], c.roi_area_um2(), c.roi_pixels());
+    describe(c, inhibition, out);
+    return {};
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,154 @@
+// Tests of the planner's choices (engine_plan.h): what it plans, not what
+// --stats says of it.
+#include "engine/engine_plan.h"
+
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "filmgrain/render.h"
+
+namespace filmgrain {
+namespace {
+
+/// A plate of `w` x `h` pixels of one colour.
+struct Plate {
+    std::vector<float> pixels;
+    ImageView view;
+    Plate(int64_t w, int64_t h, float r, float g, float b)
+        : pixels(static_cast<size_t>(w * h * 3))
+    {
+        for (size_t i = 0; i < pixels.size(); i += 3) {
+            pixels[i]     = r;
+            pixels[i + 1] = g;
+            pixels[i + 2] = b;
+        }
+        view = ImageView { pixels.data(), w, h, 3 };
+    }
+};
+
+/// The plan of a render of `plate` (the whole scan, or `roi`).
+std::vector<LayerPlan> plan_of(const Stock& stock, const SceneSettings& scene, const Plate& plate,
+                               const RenderSettings& settings = {}, Roi roi = {})
+{
+    FrameGeometry frame;
+    EXPECT_TRUE(FrameGeometry::make(scene.frame_width_mm, plate.view.width, plate.view.height,
+                                    settings.scan_width, settings.scan_height, frame));
+    if (roi.empty())
+        roi = Roi { 0, 0, frame.scan_width, frame.scan_height };
+    std::vector<LayerPlan> plan;
+    const Status s = plan_layers(stock, scene, plate.view, frame, roi, settings, plan);
+    EXPECT_TRUE(s) << s.message();
+    return plan;
+}
+
+bool all_fog(const LayerPlan& plan)
+{
+    for (const PopulationPlan& pp : plan.populations)
+        if (pp.kinetics != KineticsMethod::fog)
+            return false;
+    return !plan.populations.empty();
+}
+
+TEST(EnginePlan, AnUnlitLayerGeneratesOnlyItsFogsGrainsWhereThatIsCheapest)
+{
+    // A 1.2 mm frame of the paper's colour stock, black: few fog grains
+    // (f n = 0.016 per um^2), cheaper than a pixel model's build.
+    Stock stock;
+    ASSERT_TRUE(load_stock("color-negative", stock));
+    SceneSettings scene;
+    scene.frame_width_mm = 1.2;
+    const Plate black(48, 32, 0.0f, 0.0f, 0.0f);
+    for (Engine engine : { Engine::automatic, Engine::fast }) {
+        RenderSettings settings;
+        settings.engine = engine;
+        for (const LayerPlan& plan : plan_of(stock, scene, black, settings)) {
+            EXPECT_TRUE(plan.unlit);
+            EXPECT_TRUE(all_fog(plan));
+            EXPECT_EQ(plan.pixel_model, nullptr);
+            for (const PopulationPlan& pp : plan.populations) {
+                ASSERT_NE(pp.fast, nullptr);
+                // The thinned process: f times the grains.
+                double per_um2 = 0.0;
+                for (const PopulationGrains::Bin& bin : pp.grains.bins())
+                    per_um2 += bin.grains_per_um2;
+                const double f = 1 - std::exp(-stock.development_time_s / stock.fog_tau_s);
+                EXPECT_NEAR(per_um2, f * stock.layers[0].populations[&pp - &plan.populations[0]]
+                                             .grains_per_um2,
+                            1e-12);
+            }
+            EXPECT_GT(plan.estimated_seconds, 0.0);
+        }
+    }
+    // The exact engine is the reference: every grain, its chain.
+    RenderSettings exact;
+    exact.engine = Engine::exact;
+    for (const LayerPlan& plan : plan_of(stock, scene, black, exact)) {
+        EXPECT_FALSE(plan.unlit);
+        for (const PopulationPlan& pp : plan.populations)
+            EXPECT_EQ(pp.kinetics, KineticsMethod::chain);
+    }
+}
+
+TEST(EnginePlan, AnUnlitLayerOfAFineStockTakesThePixelScale)
+{
+    // A Super 35 frame of vision3-500t at 64x48, black: ~3.5e8 fog grains a
+    // layer, far dearer than its 3072 pixels at pixel scale.
+    Stock stock;
+    ASSERT_TRUE(load_stock("vision3-500t", stock));
+    const Plate black(64, 48, 0.0f, 0.0f, 0.0f);
+    const std::vector<LayerPlan> plans = plan_of(stock, SceneSettings {}, black);
+    const double f = 1 - std::exp(-stock.development_time_s / stock.fog_tau_s);
+    const double pixel_um2 = std::pow(24.89e3 / 64, 2);
+    for (size_t l = 0; l < plans.size(); ++l) {
+        const LayerPlan& plan = plans[l];
+        EXPECT_TRUE(plan.unlit);
+        EXPECT_TRUE(all_fog(plan));
+        ASSERT_NE(plan.pixel_model, nullptr);
+        // Its model at zero exposure is the fog's: f n developed centres
+        // per square micrometre (MODEL.md 4 with n4 = 0).
+        double n = 0.0;
+        for (const Population& pop : stock.layers[l].populations)
+            n += pop.grains_per_um2;
+        EXPECT_NEAR(plan.pixel_model->at(0.0).developed_per_pixel / (f * n * pixel_um2), 1.0,
+                    1e-9);
+    }
+}
+
+TEST(EnginePlan, OnlyTheUnlitLayersTakeTheFogPath)
+{
+    // Layers reading only their own channel; red light only.
+    Stock stock;
+    ASSERT_TRUE(load_stock("color-negative", stock));
+    stock.layers[0].sensitivity = { 1.0, 0.0, 0.0 };
+    stock.layers[1].sensitivity = { 0.0, 1.0, 0.0 };
+    stock.layers[2].sensitivity = { 0.0, 0.0, 1.0 };
+    SceneSettings scene;
+    scene.frame_width_mm = 1.2;
+    const Plate red(48, 32, 0.18f, 0.0f, 0.0f);
+    const std::vector<LayerPlan> plan = plan_of(stock, scene, red);
+    EXPECT_FALSE(plan[0].unlit);
+    for (const PopulationPlan& pp : plan[0].populations)
+        EXPECT_NE(pp.kinetics, KineticsMethod::fog);
+    EXPECT_TRUE(plan[1].unlit && all_fog(plan[1]));
+    EXPECT_TRUE(plan[2].unlit && all_fog(plan[2]));
+}
+
+TEST(EnginePlan, WhereTheRenderReadsTheWholeFrameAROIDecidesAsTheFrameDoes)
+{
+    // vision3-500t spreads light, so a render reads the whole frame
+    // (read_region): one lit pixel far from a ROI makes its layers lit
+    // there as in the full render (whose pixels the ROI must reproduce).
+    Stock stock;
+    ASSERT_TRUE(load_stock("vision3-500t", stock));
+    Plate plate(64, 48, 0.0f, 0.0f, 0.0f);
+    for (int c = 0; c < 3; ++c)
+        plate.pixels[c] = 0.18f;  // pixel (0, 0)
+    const Roi far { 48, 32, 64, 48 };
+    for (const LayerPlan& plan : plan_of(stock, SceneSettings {}, plate, {}, far))
+        EXPECT_FALSE(plan.unlit);
+}
+
+}  // namespace
+}  // namespace filmgrain

@@ -1,0 +1,210 @@
+// The render's settings: their validation, the names of engines and methods
+// (for --stats, the CLI and Python), the seeds, and the scan geometry they
+// ask for.
+#include "filmgrain/render.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "model/geometry.h"
+#include "util/rng.h"
+
+namespace filmgrain {
+
+Status SceneSettings::validate() const
+{
+    if (!std::isfinite(exposure_stops) || exposure_stops < -64.0 || exposure_stops > 64.0)
+        return Status::errorf("exposure = ", exposure_stops, " stops: must be in [-64, 64]");
+    if (!std::isfinite(shutter_s) || shutter_s <= 0.0 || shutter_s > 1e7)
+        return Status::errorf("shutter = ", shutter_s, " s: must be in (0, 1e7]");
+    if (!std::isfinite(frame_width_mm) || frame_width_mm <= 0.0 || frame_width_mm > 1e9)
+        return Status::errorf("width_mm = ", frame_width_mm, ": must be in (0, 1e9]");
+    if (frame && (*frame < -kMaxFrameNumber || *frame > kMaxFrameNumber))
+        return Status::errorf("frame = ", *frame, ": must be in [", -kMaxFrameNumber, ", ",
+                              kMaxFrameNumber, "]");
+    return {};
+}
+
+uint64_t frame_seed(uint64_t seed, int64_t frame)
+{
+    return hash_ids(seed, 0xf4a3eULL, static_cast<uint64_t>(frame));
+}
+
+uint64_t grain_seed(const SceneSettings& scene)
+{
+    return scene.frame && !scene.static_grain ? frame_seed(scene.seed, *scene.frame) : scene.seed;
+}
+
+const char* engine_name(Engine engine)
+{
+    switch (engine) {
+    case Engine::exact: return "exact";
+    case Engine::fast: return "fast";
+    case Engine::automatic: return "auto";
+    }
+    return "unknown";
+}
+
+const char* kinetics_method_name(KineticsMethod method)
+{
+    switch (method) {
+    case KineticsMethod::chain: return "chain";
+    case KineticsMethod::early_stop: return "early";
+    case KineticsMethod::table: return "table";
+    case KineticsMethod::curve: return "curve";
+    case KineticsMethod::fog: return "fog";
+    }
+    return "unknown";
+}
+
+const char* exposure_method_name(ExposureMethod method)
+{
+    return method == ExposureMethod::disc ? "disc" : "centre";
+}
+
+const char* coverage_method_name(CoverageMethod method)
+{
+    switch (method) {
+    case CoverageMethod::exact: return "exact";
+    case CoverageMethod::scanline: return "scanline";
+    case CoverageMethod::raster: return "raster";
+    }
+    return "unknown";
+}
+
+const char* grain_method_name(GrainMethod method)
+{
+    return method == GrainMethod::exact ? "exact" : "fast";
+}
+
+const char* scale_method_name(ScaleMethod method)
+{
+    return method == ScaleMethod::grain ? "grain" : "pixel";
+}
+
+std::vector<std::string> engine_names() { return { "auto", "exact", "fast" }; }
+
+namespace {
+
+template<typename E, size_t N>
+bool parse_by_name(const std::string& name, const E (&values)[N], const char* (*to_name)(E),
+                   E& out)
+{
+    for (E v : values)
+        if (name == to_name(v)) {
+            out = v;
+            return true;
+        }
+    return false;
+}
+
+}  // namespace
+
+bool parse_engine(const std::string& name, Engine& out)
+{
+    constexpr Engine all[] = { Engine::exact, Engine::fast, Engine::automatic };
+    return parse_by_name(name, all, engine_name, out);
+}
+
+const char* frame_edge_name(FrameEdge edge)
+{
+    return edge == FrameEdge::gate ? "gate" : "clamp";
+}
+
+bool parse_frame_edge(const std::string& name, FrameEdge& out)
+{
+    constexpr FrameEdge all[] = { FrameEdge::clamp, FrameEdge::gate };
+    return parse_by_name(name, all, frame_edge_name, out);
+}
+
+bool parse_kinetics_method(const std::string& name, KineticsMethod& out)
+{
+    constexpr KineticsMethod all[] = { KineticsMethod::chain, KineticsMethod::early_stop,
+                                       KineticsMethod::table, KineticsMethod::curve,
+                                       KineticsMethod::fog };
+    return parse_by_name(name, all, kinetics_method_name, out);
+}
+
+bool parse_grain_method(const std::string& name, GrainMethod& out)
+{
+    constexpr GrainMethod all[] = { GrainMethod::exact, GrainMethod::fast };
+    return parse_by_name(name, all, grain_method_name, out);
+}
+
+bool parse_scale_method(const std::string& name, ScaleMethod& out)
+{
+    constexpr ScaleMethod all[] = { ScaleMethod::grain, ScaleMethod::pixel };
+    return parse_by_name(name, all, scale_method_name, out);
+}
+
+bool parse_exposure_method(const std::string& name, ExposureMethod& out)
+{
+    constexpr ExposureMethod all[] = { ExposureMethod::disc, ExposureMethod::centre };
+    return parse_by_name(name, all, exposure_method_name, out);
+}
+
+bool parse_coverage_method(const std::string& name, CoverageMethod& out)
+{
+    constexpr CoverageMethod all[]
+        = { CoverageMethod::exact, CoverageMethod::scanline, CoverageMethod::raster };
+    return parse_by_name(name, all, coverage_method_name, out);
+}
+
+Status RenderSettings::validate() const
+{
+    if (!(tolerance > 0.0 && tolerance <= 1.0))
+        return Status::errorf("tolerance = ", tolerance, ": must be in (0, 1]");
+    if (coverage_samples < 0 || coverage_samples > 256)
+        return Status::errorf("coverage samples = ", coverage_samples, ": must be in [0, 256]");
+    if (tile_size_px < 1 || tile_size_px > 4096)
+        return Status::errorf("tile size = ", tile_size_px, ": must be in [1, 4096]");
+    if (nthreads < 0)
+        return Status::errorf("nthreads = ", nthreads, ": must be >= 0");
+    if (engine == Engine::exact
+        && (kinetics || exposure_method || coverage || coverage_samples || grains || scale))
+        return Status::error("the exact engine is the reference: its kinetics, exposure, "
+                             "coverage, grain and scale methods cannot be overridden (use engine=fast "
+                             "or auto)");
+    if (kinetics == KineticsMethod::curve && grains == GrainMethod::exact)
+        return Status::error("kinetics=curve runs in the fast per-grain kernel, which draws "
+                             "grains=fast");
+    return {};
+}
+
+Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
+                     const RenderSettings& settings, ScanGeometry& out)
+{
+    FrameGeometry g;
+    if (Status s = FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
+                                       settings.scan_width, settings.scan_height, g,
+                                       settings.scan_reference);
+        !s)
+        return s;
+    out.width           = g.scan_width;
+    out.height          = g.scan_height;
+    out.frame_width_um  = g.width_um;
+    out.frame_height_um = g.height_um;
+    out.input_pitch_um  = g.input_pitch_um;
+    out.pitch_x_um      = g.scan_pitch_x_um;
+    out.pitch_y_um      = g.scan_pitch_y_um;
+    out.reference       = g.scan_reference;
+    out.frame_pixels    = g.frame_scan_pixels();
+    return {};
+}
+
+Roi scan_pixels_over(const ScanGeometry& scan, const Roi& input_pixels, double* exact)
+{
+    const Roi& r = scan.reference;
+    if (exact) {
+        const double sx = static_cast<double>(scan.width) / static_cast<double>(r.width());
+        const double sy = static_cast<double>(scan.height) / static_cast<double>(r.height());
+        exact[0] = static_cast<double>(input_pixels.x_begin - r.x_begin) * sx;
+        exact[1] = static_cast<double>(input_pixels.y_begin - r.y_begin) * sy;
+        exact[2] = static_cast<double>(input_pixels.x_end - r.x_begin) * sx;
+        exact[3] = static_cast<double>(input_pixels.y_end - r.y_begin) * sy;
+    }
+    return scan_pixels_over(r, scan.width, scan.height, input_pixels);
+}
+
+}  // namespace filmgrain

@@ -1,0 +1,237 @@
+// filmgrain: the per-grain kernel of the fast paths. MODEL.md 1-4 for the
+// grains of a tile in one plain loop per cell, chosen once per population
+// (OCIO's "renderer chosen once"):
+//   - generation: the population's Poisson process, cell by cell as
+//     PopulationGrains splits it (same bins, cells and intensities), but a
+//     cell's count comes from its bin's tabulated Poisson CDF, and
+//     each grain's position, size and develop uniform come from two words
+//     of a counter-based stream of its cell (no per-grain seeding), and its
+//     radius from the bin's tabulated quantile function;
+//   - exposure at the grain's centre times its area (ExposureMethod::centre),
+//     read from a float plane of the layer's values over the tile;
+//   - development: one uniform against P(develop | lambda) (DevelopCurve),
+//     the Poisson count and the latent-image chain folded into the curve.
+// Same distribution as the exact engine up to the errors each step reports
+// (quantile interpolation, centre exposure, the curve and its table); not
+// the same grains (the streams differ). Deterministic: everything is keyed
+// by the cell.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "model/exposure.h"
+#include "model/geometry.h"
+#include "model/image_formation.h"
+#include "util/rng.h"
+#include "util/sampling.h"
+
+namespace filmgrain {
+
+/// A population's grains drawn the fast way. Thread safety: const.
+class FastGrains {
+public:
+    /// `quantiles` intervals of the radius quantile function per bin.
+    FastGrains(const PopulationGrains& grains, int quantiles = 4096);
+
+    /// Largest relative error of a tabulated radius, measured at the
+    /// midpoints between quantile nodes against the exact inverse CDF (it
+    /// is largest at the steep ends of the bins: ~0.45 in the lowest
+    /// 1/quantiles of bin 0, whose radius tends to 0, ~1e-2 at most else).
+    double max_radius_relative_error() const { return m_max_radius_error; }
+    /// Relative error of the mean disc area the table gives (what moves a
+    /// density: D = 0.434 n E[a P]), against Simpson's rule on the exact
+    /// quantile function.
+    double mean_area_relative_error() const { return m_mean_area_error; }
+
+    /// Calls visit(x_um, y_um, r_um, u_bits, id) for every grain whose centre
+    /// lies within its bin's largest radius of `rect`: u_bits is 32 uniform
+    /// bits for the grain's development, id a stable identity for the rare
+    /// grain that needs more random numbers (its photon count beyond the
+    /// curve).
+    template<typename Visit> void for_each_grain_near(const RectUm& rect, Visit&& visit) const;
+
+    /// A cell's grains as arrays, for kernels that decide them in plain
+    /// loops: grain i is at (x[i], y[i]) with radius r[i] and development
+    /// bits u_bits[i]; its identity (for_each_grain_near's id) is
+    /// grain_id(i).
+    struct Batch {
+        uint64_t cell = 0;
+        size_t n      = 0;
+        std::vector<double> x, y, r;
+        std::vector<uint32_t> u_bits;
+        uint64_t grain_id(size_t i) const { return hash_combine(cell, i); }
+    };
+    /// Calls visit(batch) for every cell of for_each_grain_near, in its
+    /// order, with the cell's grains (the same grains, in the same order).
+    /// `batch` is scratch, reused from cell to cell.
+    template<typename Visit>
+    void for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const;
+
+private:
+    PopulationGrains m_grains;
+    int m_quantiles = 0;
+    /// Per bin: radius at u = k / quantiles, k = 0..quantiles, and a copy of
+    /// the last (interpolation at u -> 1 needs no check).
+    std::vector<std::vector<double>> m_radius;
+    /// Per bin: its cells' Poisson counts, tabulated.
+    std::vector<PoissonTable> m_counts;
+    double m_max_radius_error = 0.0;
+    double m_mean_area_error  = 0.0;
+};
+
+template<typename Visit>
+void FastGrains::for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const
+{
+    constexpr double k2m32 = 0x1.0p-32;
+    const double q         = static_cast<double>(m_quantiles) * k2m32;
+    m_grains.for_each_cell_near(rect, [&](size_t b, int64_t cx, int64_t cy) {
+        const PopulationGrains::Bin& bin = m_grains.bins()[b];
+        const uint64_t cell              = m_grains.cell_id(b, cx, cy);
+        Rng count_rng(cell, Stage::fast_cell);
+        const uint64_t n = m_counts[b].sample(count_rng.uniform());
+        batch.cell = cell;
+        batch.n    = static_cast<size_t>(n);
+        if (batch.x.size() < batch.n) {
+            batch.x.resize(batch.n);
+            batch.y.resize(batch.n);
+            batch.r.resize(batch.n);
+            batch.u_bits.resize(batch.n);
+        }
+        const double* radius = m_radius[b].data();
+        const double x0 = static_cast<double>(cx) * bin.cell_um;
+        const double y0 = static_cast<double>(cy) * bin.cell_um;
+        const double scale = bin.cell_um * k2m32;
+        double* xs = batch.x.data();
+        double* ys = batch.y.data();
+        double* rs = batch.r.data();
+        uint32_t* us = batch.u_bits.data();
+        for (size_t i = 0; i < batch.n; ++i) {
+            const uint64_t w0 = counter_u64(cell, 2 * i);
+            const uint64_t w1 = counter_u64(cell, 2 * i + 1);
+            xs[i]          = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
+            ys[i]          = y0 + static_cast<double>(w0 >> 32) * scale;
+            const double t = static_cast<double>(w1 & 0xffffffffu) * q;
+            const size_t k = static_cast<size_t>(t);
+            rs[i] = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
+            us[i] = static_cast<uint32_t>(w1 >> 32);
+        }
+        visit(static_cast<const Batch&>(batch));
+    });
+}
+
+template<typename Visit>
+void FastGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+{
+    Batch batch;
+    for_each_cell_batch(rect, batch, [&](const Batch& b) {
+        for (size_t i = 0; i < b.n; ++i)
+            visit(b.x[i], b.y[i], b.r[i], b.u_bits[i], b.grain_id(i));
+    });
+}
+
+/// The area of the unit disc beyond a line at distance t from its centre,
+/// acos t - t sqrt(1 - t^2) for t in [0, 1] (pi/2 at 0, 0 at 1 and beyond),
+/// tabulated (linear interpolation on 4096 intervals) for the kernel's disc
+/// integral. Thread safety: const.
+class SegmentTable {
+public:
+    SegmentTable();
+    /// S(t) by linear interpolation, t in [0, 1] (the kernel's loops,
+    /// PlaneIntegrals, interpolate the same nodes the same way).
+    double area(double t) const
+    {
+        const double s = t * kIntervals;
+        const int k    = static_cast<int>(s);
+        return m_area[k] + (s - static_cast<double>(k)) * (m_area[k + 1] - m_area[k]);
+    }
+    /// Largest absolute error of area() against the formula, measured at
+    /// the midpoints of the intervals (~1e-6, in the last interval, where
+    /// the area falls as (1 - t)^1.5).
+    double max_error() const { return m_max_error; }
+    /// The process's table.
+    static const SegmentTable& shared();
+
+    static constexpr int kIntervals = 4096;
+    /// The nodes, at t = k / kIntervals for k = 0..kIntervals, and a copy
+    /// of the last (t = 1 reads it and the next).
+    const double* nodes() const { return m_area.data(); }
+
+private:
+    std::vector<double> m_area;
+    double m_max_error = 0.0;
+};
+
+/// The exposure values v of one layer (LayerExposure) over the input pixels
+/// under a film rectangle, as floats; beyond the image the nearest edge
+/// pixel's (the exposure's edge clamp) or 0 (gate), as LayerExposure reads
+/// them: the centre lookup of the fast kernel costs one load, its disc
+/// integral four. Reused from tile to tile.
+class ExposurePlane {
+public:
+    /// Fills the plane for the input pixels that `rect` touches.
+    void fill(const LayerExposure& exposure, const FrameGeometry& frame, const RectUm& rect);
+
+    /// The input pixel pitch: the largest radius integral_over_disc takes;
+    /// integrals_over_discs takes half of it.
+    double pitch_um() const { return m_pitch_um; }
+
+    /// The integral of v over the disc (value x um^2) against the
+    /// box-reconstructed image, as LayerExposure::integrate_over_disc, for
+    /// a disc of radius r <= pitch_um() that lies inside the filled window
+    /// (pixels beyond it read 0, as outside the image). Such a disc never
+    /// crosses two pixel edges on one side of its centre. A disc with r <=
+    /// pitch / 2 crosses at most the nearer vertical and horizontal edge:
+    /// with a = the distance to the vertical edge and b to the horizontal
+    /// one, in radii, its area beyond the vertical edge is r^2 S(a), beyond
+    /// the horizontal one r^2 S(b) (S: SegmentTable), and beyond both (the
+    /// corner's quadrant, when the corner is inside the disc, a^2 + b^2 <
+    /// 1) r^2 (S(a) / 2 + S(b) / 2 - pi / 4 + a b): the four pixels around
+    /// the corner get their shares of pi r^2. A wider disc: the same with
+    /// the edges on both sides and the four corners, over the nine pixels
+    /// around. Exact up to the segment table's error (max_error() r^2 per
+    /// edge) and the plane's float values.
+    double integral_over_disc(double x_um, double y_um, double r_um) const;
+
+    /// integral_over_disc of n discs (x[i], y[i], r[i]) with r <= pitch / 2
+    /// into out[i], in one loop that the AVX2 build runs four discs at a
+    /// time (the same values in every build: the same IEEE operations, no
+    /// FMA). A wider disc, or one beyond the window, gets a wrong value,
+    /// never a read outside the plane's memory. `portable`: the baseline
+    /// build even where the processor has AVX2 (for the test that both
+    /// agree).
+    void integrals_over_discs(const double* x_um, const double* y_um, const double* r_um,
+                              size_t n, double* out, bool portable = false) const;
+
+    /// v at the input pixel holding (x, y); 0 outside the filled window
+    /// (outside the image, or beyond the rectangle it was filled for).
+    double at(double x_um, double y_um) const
+    {
+        // floor() without a library call: negative values fall outside the
+        // window whichever way they round, as the check below needs.
+        const double gx = x_um * m_per_pitch_um - m_x0, gy = y_um * m_per_pitch_um - m_y0;
+        if (!(gx >= 0.0 && gy >= 0.0 && gx < m_w && gy < m_h))
+            return 0.0;
+        const size_t fx = static_cast<size_t>(gx), fy = static_cast<size_t>(gy);
+        return m_padded[(fy + kPad) * m_padded_stride + (fx + kPad)];
+    }
+
+private:
+    /// Pixels of zeros around the window in m_padded.
+    static constexpr int64_t kPad = 2;
+    friend struct PlaneIntegrals;
+
+    /// The window's values with kPad pixels of zeros on every side (the
+    /// disc integrals read the neighbours of a pixel without checks).
+    std::vector<float> m_padded;
+    int64_t m_nx = 0, m_ny = 0;
+    size_t m_padded_stride = 0;
+    const SegmentTable* m_segment = &SegmentTable::shared();
+    double m_pitch_um = 0.0;
+    double m_per_pitch_um = 0.0;
+    double m_x0 = 0.0, m_y0 = 0.0, m_w = 0.0, m_h = 0.0;
+};
+
+}  // namespace filmgrain
