@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "analysis.h"
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 
 namespace filmgrain::sensitometry {
 namespace {

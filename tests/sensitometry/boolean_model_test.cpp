@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 #include "expect/expected_curve_model.h"
 
 namespace filmgrain::sensitometry {
@@ -16,7 +16,7 @@ BooleanLayer monodisperse(double n_per_um2, double d_um, double p_develop)
 {
     PopulationDevelopment pop;
     pop.grains_per_um2 = n_per_um2;
-    pop.nodes          = { SizeNode { d_um, 1.0, p_develop } };
+    pop.nodes          = { DevelopedSize { d_um, 1.0, p_develop } };
     const double a     = M_PI / 4.0 * d_um * d_um;
     pop.develop_fraction    = p_develop;
     pop.area_developed_um2  = a * p_develop;
@@ -59,7 +59,7 @@ TEST(BooleanModel, CouplerLimitedCovarianceIsClosedForm)
     const auto population = [&](double n, double d_um, bool fill) {
         PopulationDevelopment pop;
         pop.grains_per_um2   = n;
-        pop.nodes            = { SizeNode { d_um, 1.0, 1.0 } };
+        pop.nodes            = { DevelopedSize { d_um, 1.0, 1.0 } };
         pop.develop_fraction = 1.0;
         pop.filled           = fill ? image.filled(limited) : FilledImage {};
         return pop;

@@ -1,12 +1,12 @@
 // Granularity measured with the exact engine through circular apertures
 // (granularity.h) against Selwyn's law and the Boolean model of
-// overlapping opaque discs or dye clouds (boolean_model.h).
+// overlapping opaque discs or dye clouds (core/src/expect/boolean_model.h).
 #include <cmath>
 #include <functional>
 
 #include <gtest/gtest.h>
 
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 #include "granularity.h"
 #include "patch.h"
 #include "test_support.h"
@@ -52,7 +52,7 @@ Scan scan(const std::string& name, double net_density, double side_um, double pi
         // MODEL.md 10 on a uniform patch: every P times exp(-a Dbar), Dbar
         // the density without inhibition (fog included, base excluded).
         const double factor = std::exp(-stock.inhibition[0][0] * out.model.net_density());
-        for (SizeNode& node : pd.nodes)
+        for (DevelopedSize& node : pd.nodes)
             node.develop_probability *= factor;
         pd.area_developed_um2 *= factor;
         out.model = BooleanLayer({ pd }, ImageOverlap(stock.layers[0]));

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 #include "model/development.h"
 #include "expect/expectations.h"
 #include "strip.h"

@@ -992,8 +992,8 @@ Status render_check(const Stock& full_stock, const sm::Datasheet& sheet,
                 std::vector<std::vector<double>> tr;
                 if (Status s = expose(x, sm::kDatasheetShutterS, 1200.0, 2.0, r, &tr); !s)
                     return s;
-                const sm::ApertureTemplate ap
-                    = sm::make_circular_aperture(sm::kGranularityApertureUm, r.pitch_um);
+                const filmgrain::ApertureTemplate ap
+                    = filmgrain::make_circular_aperture(sm::kGranularityApertureUm, r.pitch_um);
                 const sm::GranularityReading gr
                     = sm::read_granularity(tr[l], r.side_px, ap, 12, stock.layer_base_density(l), 4);
                 out.push_back({ t.name + " RMS at " + (gt.net ? "net " : "gross ")

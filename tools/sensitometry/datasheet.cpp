@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis.h"
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 #include "expect/expected_curve_model.h"
 #include "model/inhibition.h"
 

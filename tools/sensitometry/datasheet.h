@@ -3,9 +3,10 @@
 // datasheet file (../shared/datasheets/README.md gives the format) and
 // measured on a stock the datasheet way, analytically: from the model's
 // expected characteristic curve (core: expected_curves' pieces,
-// core/src/expect/expected_curve_model.h) and the Boolean model's aperture
-// variance (boolean_model.h). No rendering; filmgrain-fit searches with
-// these and tests/stocks holds the built-in stocks to them.
+// core/src/expect/expected_curve_model.h) and the Boolean model's
+// aperture variance (core/src/expect/boolean_model.h). No rendering;
+// filmgrain-fit searches with these and tests/stocks holds the built-in
+// stocks to them.
 //
 // Conventions (each a documented choice where the datasheet is silent):
 // - Exposures are neutral, lux-seconds: a layer receives sum(sensitivity)

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 
 namespace filmgrain::sensitometry {
 

@@ -22,7 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis.h"
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 #include "filmgrain/render.h"
 #include "filmgrain/wedge.h"
 #include "granularity.h"
@@ -429,7 +429,7 @@ private:
         double target_net = 0.0, log10_h = 0.0;
         fs::PatchReading patch;
         std::vector<std::vector<double>> transmittance;
-        fs::BooleanLayer model;
+        filmgrain::BooleanLayer model;
     };
     Status granularity_patch(const Stock& stock, size_t layer, double target_net,
                              double side_um, double pitch_um, uint64_t seed,
@@ -437,7 +437,7 @@ private:
     {
         out.target_net = target_net;
         const auto t0 = std::chrono::steady_clock::now();
-        if (Status s = fs::exposure_for_predicted_density(stock, layer, target_net, 1e-2,
+        if (Status s = filmgrain::exposure_for_predicted_density(stock, layer, target_net, 1e-2,
                                                           std::log10(stock.exposure_at_grey_lxs),
                                                           out.log10_h);
             !s)
@@ -452,7 +452,7 @@ private:
         if (Status s = fs::expose_patch(stock, p, m_settings, out.patch, &out.transmittance); !s)
             return s;
         const auto t1 = std::chrono::steady_clock::now();
-        Status s = fs::predict_layer(stock, layer, p.exposure_lxs, 1e-2, 3000, seed ^ 0xb001, out.model);
+        Status s = filmgrain::predict_layer(stock, layer, p.exposure_lxs, 1e-2, 3000, seed ^ 0xb001, out.model);
         std::cerr << "  " << stock.name << " net " << target_net << ": exposure " << t_solve
                   << " s, render " << out.patch.seconds << " s, prediction " << seconds_since(t1)
                   << " s\n";
@@ -463,14 +463,14 @@ private:
     json granularity_row(const Stock& stock, const GranularityCase& c, size_t layer,
                          double aperture_um, Csv* csv, const std::string& label)
     {
-        const fs::ApertureTemplate a = fs::make_circular_aperture(aperture_um, c.patch.pitch_um);
+        const filmgrain::ApertureTemplate a = filmgrain::make_circular_aperture(aperture_um, c.patch.pitch_um);
         const int spacing = std::max(1, static_cast<int>(std::lround(aperture_um / 4.0 / c.patch.pitch_um)));
         const fs::GranularityReading g = fs::read_granularity(
             c.transmittance[layer], c.patch.side_px, a, spacing, stock.layer_base_density(layer));
         const double t          = c.model.mean_transmittance();
-        const double boolean    = std::sqrt(fs::aperture_transmittance_variance(c.model, a)) / t
+        const double boolean    = std::sqrt(filmgrain::aperture_transmittance_variance(c.model, a)) / t
                                / std::log(10.0);
-        const double siedentopf = fs::siedentopf_sigma_density(
+        const double siedentopf = filmgrain::siedentopf_sigma_density(
             c.model.mean_developed_area_um2(), g.mean_density - stock.layer_base_density(layer),
             a.area_um2());
         const fs::LayerReading& r = c.patch.layers[layer];
@@ -569,8 +569,8 @@ private:
         // populations and sensitivities summing to 1: one patch, exposed
         // for the green layer, serves all three.
         {
-            fs::BooleanLayer fog_model;
-            if (Status s = fs::predict_layer(neg, 1, 0.0, 1e-2, 100, 5, fog_model); !s)
+            filmgrain::BooleanLayer fog_model;
+            if (Status s = filmgrain::predict_layer(neg, 1, 0.0, 1e-2, 100, 5, fog_model); !s)
                 return s;
             GranularityCase c;
             if (Status s = granularity_patch(neg, 1, 1.0 + fog_model.net_density(), 1000.0, 3.0,

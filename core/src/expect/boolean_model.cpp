@@ -1,7 +1,7 @@
 // What the model predicts for a uniform layer: development by grain size,
 // the Boolean model of opaque discs, aperture variance, Nutting and
 // Siedentopf. No rendering: the distributions of MODEL.md 1-5 composed.
-#include "boolean_model.h"
+#include "expect/boolean_model.h"
 
 #include <algorithm>
 #include <array>
@@ -15,7 +15,7 @@
 #include "model/kinetics.h"
 #include "kernels/pixel_model.h"
 
-namespace filmgrain::sensitometry {
+namespace filmgrain {
 
 Status develop_by_size(const Stock& stock, const Population& pop, double exposure_lxs,
                        double shutter_s, int max_samples, uint64_t seed,
@@ -30,9 +30,9 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
     out.grains_per_um2 = pop.grains_per_um2;
     // The size nodes and photon counts of grain_counts.h: one quadrature
     // for every "sizes x counts x P(develop | N)" integral.
-    const std::vector<filmgrain::SizeNode>& sizes = size_quadrature(pop);
-    for (const filmgrain::SizeNode& q : sizes) {
-        SizeNode node;
+    const std::vector<SizeNode>& sizes = size_quadrature(pop);
+    for (const SizeNode& q : sizes) {
+        DevelopedSize node;
         node.diameter_um = diameter_at_z_um(pop, q.z);
         node.weight      = q.weight;
         out.nodes.push_back(node);
@@ -48,7 +48,7 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
         imp[1] += w * a * a * p;
     });
     double total[2] = { 0.0, 0.0 };
-    for (const SizeNode& node : out.nodes) {
+    for (const DevelopedSize& node : out.nodes) {
         const double a = M_PI / 4.0 * node.diameter_um * node.diameter_um;
         total[0] += node.weight * a;
         total[1] += node.weight * a * a;
@@ -95,7 +95,7 @@ Status develop_by_size(const Stock& stock, const Population& pop, double exposur
         area_weight[n] += w * a * p;
     });
     for (size_t k = 0; k < out.nodes.size(); ++k) {
-        SizeNode& node = out.nodes[k];
+        DevelopedSize& node = out.nodes[k];
         const double a = M_PI / 4.0 * node.diameter_um * node.diameter_um;
         node.develop_probability = std::clamp(p_node[k], 0.0, 1.0);
         out.develop_fraction += node.weight * node.develop_probability;
@@ -121,7 +121,7 @@ BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations
         m_area_developed += pop.grains_per_um2 * pop.area_developed_um2;
         const bool limited = pop.filled.opacity > 0.0;
         double blocked = 0.0;
-        for (const SizeNode& node : pop.nodes) {
+        for (const DevelopedSize& node : pop.nodes) {
             const double r_um = 0.5 * node.diameter_um;
             blocked += node.weight * node.develop_probability
                        * (limited ? image.cloud_lens_um2(r_um, 0.0) : image.blocking_um2(r_um));
@@ -151,7 +151,7 @@ BooleanLayer::BooleanLayer(const std::vector<PopulationDevelopment>& populations
             tab = &m_filled[f++].k;
             tab->assign(steps, 0.0);
         }
-        for (const SizeNode& node : pop.nodes) {
+        for (const DevelopedSize& node : pop.nodes) {
             const double w = pop.grains_per_um2 * node.weight * node.develop_probability;
             if (w > 0.0)
                 terms.push_back({ 0.5 * node.diameter_um, w,
@@ -214,10 +214,10 @@ BooleanLayer boolean_layer_at(const std::vector<PixelPopulation>& populations, d
         PopulationDevelopment d;
         d.grains_per_um2 = pp.population->grains_per_um2;
         d.filled         = image.filled(*pp.population);
-        for (const filmgrain::SizeNode& q : size_quadrature(*pp.population)) {
+        for (const SizeNode& q : size_quadrature(*pp.population)) {
             const double r_um  = pp.grains->radius_at_z_um(q.z);
             const double a_um2 = M_PI * r_um * r_um;
-            SizeNode node;
+            DevelopedSize node;
             node.diameter_um         = 2.0 * r_um;
             node.weight              = q.weight;
             node.develop_probability = develop_factor
@@ -452,4 +452,4 @@ double siedentopf_sigma_density(double mean_grain_area_um2, double net_density,
                                        / aperture_area_um2));
 }
 
-}  // namespace filmgrain::sensitometry
+}  // namespace filmgrain

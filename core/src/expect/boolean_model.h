@@ -1,5 +1,5 @@
-// filmgrain sensitometry: what the model predicts for a uniformly exposed
-// layer, computed without rendering (MODEL.md 1-5): development resolved by
+// filmgrain: what the model predicts for a uniformly exposed layer,
+// computed without rendering (MODEL.md 1-5 and 8): development resolved by
 // grain size, the Boolean model of overlapping opaque discs (mean
 // transmittance, covariance), the variance of a densitometer aperture, and
 // the classical low-density laws (Nutting, Siedentopf).
@@ -13,14 +13,12 @@
 #include "filmgrain/status.h"
 
 namespace filmgrain {
-struct PixelPopulation;
-}
 
-namespace filmgrain::sensitometry {
+struct PixelPopulation;
 
 /// One node of the diameter quadrature: a diameter, its probability weight
 /// and the probability that a grain of that diameter develops.
-struct SizeNode {
+struct DevelopedSize {
     double diameter_um         = 0.0;
     double weight              = 0.0;  ///< quadrature weight (sums to 1)
     double develop_probability = 0.0;  ///< P(develop | d), fog included
@@ -32,7 +30,7 @@ struct SizeNode {
 /// latent-image chain (expectations.h: DevelopGivenPhotons).
 struct PopulationDevelopment {
     double grains_per_um2 = 0.0;
-    std::vector<SizeNode> nodes;
+    std::vector<DevelopedSize> nodes;
     double develop_fraction   = 0.0;  ///< E[P]
     double area_developed_um2 = 0.0;  ///< E[a P]
     double area2_developed_um4 = 0.0; ///< E[a^2 P]
@@ -188,4 +186,4 @@ double siedentopf_sigma_density(double mean_grain_area_um2, double net_density,
 /// h_um apart (the "lens"), um^2: the core's (dye.h).
 using filmgrain::lens_area_um2;
 
-}  // namespace filmgrain::sensitometry
+}  // namespace filmgrain
