@@ -1,14 +1,12 @@
 # filmgrain-farm's tests (python/tests/test_farm.py): Dask local clusters of
 # 2 workers running the built CLI; outputs compared with the CLI's bit for
-# bit. Included from the top-level CMakeLists.txt (with FILMGRAIN_BUILD_TESTS)
-# as python/farm_tests.cmake; needs Debian's python3-dask and
+# bit. Included from the top-level CMakeLists.txt with FILMGRAIN_BUILD_TESTS,
+# whatever FILMGRAIN_BUILD_PYTHON says; needs Debian's python3-dask and
 # python3-distributed (scripts/debian-packages.txt), and not the compiled
 # Python module: the farm is loaded from the source tree (--noconftest: the
 # module's conftest.py imports the extension).
 # RUN_SERIAL: the lost-worker test kills a worker while frames run, and each
 # test starts worker processes; about 50 s on 2 loaded cores.
-set(FILMGRAIN_PYTHON /usr/bin/python3 CACHE FILEPATH
-    "Python with OpenImageIO and numpy for the CLI and regression tests")
 add_test(NAME python.farm
   COMMAND ${FILMGRAIN_PYTHON} -m pytest -q -p no:cacheprovider --noconftest
           --rootdir=${CMAKE_CURRENT_LIST_DIR}
