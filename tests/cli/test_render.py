@@ -103,6 +103,23 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert listing(tmp_path) == sorted(["ramp.exr", "out.exr", "s.json", "p.png"])
 
 
+@pytest.mark.parametrize("stock,word", [("paper", "photons=disc"), ("t-max-100", "scale=pixel")])
+def test_stats_path_is_modifiers(run, tmp_path, ramp_exr, stock, word):
+    """A layer's grain path in --stats speaks the modifiers' words: joined
+    with ':', it is accepted as --filmgrain modifiers and plans the same
+    path (it once said exposure=disc, the name of a different modifier)."""
+    def layer_path(extra, name):
+        stats = tmp_path / f"{name}.json"
+        r = run(ramp_exr, f"--filmgrain:{FAST}:stock={stock}{extra}", "-o",
+                tmp_path / f"{name}.exr", "--stats", stats)
+        assert r.returncode == 0, (extra, r.stderr)
+        return read_json(stats)["layers"][0]["path"]
+
+    chosen = layer_path("", "auto")
+    assert "exposure=" not in chosen and word in chosen, chosen
+    assert layer_path(":" + chosen.replace(" ", ":"), "pasted") == chosen
+
+
 def test_same_seed_same_pixels_other_seed_other_pixels(run, tmp_path, ramp_exr):
     outs = []
     for i, seed in enumerate([1, 1, 2]):

@@ -79,7 +79,7 @@ Metrics (definitions; the report repeats them)
   pixel T      per-pixel transmittance error |T_path - T_exact|, RMS and max
                over all pixels, for the runs whose grain fates are
                bit-identical to exact (the --stats path of every population
-               says kinetics=chain or early, exposure=disc: only the
+               says kinetics=chain or early, photons=disc: only the
                coverage differs, and exact's coverage is the converged
                render of the same grains). Other runs change grain fates:
                no per-pixel comparison, distributional metrics only.
@@ -595,7 +595,8 @@ def same_fates(stats):
         m = re.search(r"kinetics=([a-z,]+)", layer["path"])
         if not m or not set(m.group(1).split(",")) <= {"chain", "early"}:
             return False
-        if "exposure=disc" not in layer["path"]:
+        # photons=disc; exposure=disc in --stats before 2026-12-06.
+        if "photons=disc" not in layer["path"] and "exposure=disc" not in layer["path"]:
             return False
     return True
 

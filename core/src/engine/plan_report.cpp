@@ -85,7 +85,7 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
     if (plan.populations.front().fast)
         path << " grains=fast";
     if (!plan.unlit) {  // a layer no light reaches reads no exposure
-        path << " exposure=";
+        path << " photons=";  // the modifier that chooses it
         if (mixed)  // per population, as kinetics
             for (size_t p = 0; p < plan.populations.size(); ++p)
                 path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
@@ -96,7 +96,7 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
         path << " coverage=" << coverage_method_name(plan.coverage);
     if (plan.dye_samples == 0
         && (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster))
-        path << ":" << plan.coverage_samples;
+        path << " samples=" << plan.coverage_samples;
     if (c.exact) {
         why << "the reference engine: every photon, each chain until its grain is decided, "
             << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
@@ -136,7 +136,8 @@ void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vecto
         std::ostringstream path, why;
         describe_layer_image(c, l, plan, inhibition, path, why);
         if (plan.pixel_model) {
-            path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve exposure=box");
+            // Each pixel's exposure is its input pixel's mean: no photons=.
+            path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve");
             plan.path   = path.str();
             plan.reason = why.str() + plan.reason;
             continue;
