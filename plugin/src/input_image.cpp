@@ -1,5 +1,6 @@
 // filmgrain CLI: reading INPUT (input_image.h).
 #include "input_image.h"
+#include "error_text.h"
 
 #include <OpenImageIO/strutil.h>
 
@@ -24,13 +25,6 @@ constexpr int64_t kMaxInputValues = int64_t(1) << 31;  ///< pixels x channels re
 constexpr int kMaxInputChannels   = 1024;
 /// Parts of a multi-part file looked at for channels.
 constexpr int kMaxSubimages = 4096;
-
-std::string trim(std::string s)
-{
-    while (!s.empty() && (s.back() == '\n' || s.back() == ' '))
-        s.pop_back();
-    return s;
-}
 
 /// Checks what a part's header declares: a 2D, non-deep image with at
 /// least one pixel, within the limits above (its display window too: the

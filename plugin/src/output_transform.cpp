@@ -1,5 +1,6 @@
 // filmgrain CLI: the output transforms (output_transform.h).
 #include "output_transform.h"
+#include "error_text.h"
 
 #include <OpenImageIO/imagebufalgo.h>
 
@@ -123,13 +124,6 @@ void regrain_pixel(const RegrainModel& m, const float* rgb_in, const float* dens
 // --- The CLI's adapter -----------------------------------------------------
 
 namespace {
-
-std::string trim(std::string s)
-{
-    while (!s.empty() && (s.back() == '\n' || s.back() == ' '))
-        s.pop_back();
-    return s;
-}
 
 std::string format_g(double v)
 {
