@@ -10,12 +10,18 @@ each render takes a fraction of a second.
 import json
 import os
 import subprocess
+import sys
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
 
 import filmgrain
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__)))), "tests"))
+# The helpers every suite shares (tests/fgtest.py); the tests import them
+# from here.
+from fgtest import Exr, clean_env, cli_error, fg_bin, read_json, write_image  # noqa: E402,F401
 
 WIDTH, HEIGHT = 64, 48
 FAST_WIDTH_MM = 0.5
@@ -31,32 +37,9 @@ TIMING_FIELDS = ("seconds",)
 LAYER_TIMING_FIELDS = ("setup_seconds",)
 
 
-@pytest.fixture(scope="session")
-def fg_bin():
-    path = os.environ.get("FILMGRAIN_BIN")
-    if not path:
-        pytest.fail("FILMGRAIN_BIN is not set (run through ctest)")
-    assert os.access(path, os.X_OK), path
-    return path
-
-
-def clean_env():
-    """The environment without $OCIO: the CLI uses its embedded config."""
-    return {k: v for k, v in os.environ.items() if k != "OCIO"}
-
-
 def run_cli(fg_bin, *args, timeout=120):
     return subprocess.run([fg_bin, *[str(a) for a in args]], capture_output=True, text=True,
                           env=clean_env(), timeout=timeout)
-
-
-def cli_error(result):
-    """The CLI's message: its last stderr line without "filmgrain: error: "."""
-    assert result.returncode != 0, result.stderr
-    line = result.stderr.strip().splitlines()[-1]
-    prefix = "filmgrain: error: "
-    assert line.startswith(prefix), result.stderr
-    return line[len(prefix):]
 
 
 def scene_pixels(width=WIDTH, height=HEIGHT, channels=3):
@@ -66,48 +49,6 @@ def scene_pixels(width=WIDTH, height=HEIGHT, channels=3):
     planes = [0.004 * 500.0 ** x + 0 * y, 0.18 + 0.5 * y * x, 0.05 + 1.5 * (1 - y) ** 2 + 0 * x]
     img = np.stack(planes[:channels] if channels > 1 else [planes[1]], axis=-1)
     return np.ascontiguousarray(img.astype(np.float32))
-
-
-def write_exr(path, pixels, window=None):
-    """Writes (h, w, c) float32 pixels as a float EXR; window = (x, y,
-    full_x, full_y, full_width, full_height) sets data and display windows."""
-    h, w, c = pixels.shape
-    spec = oiio.ImageSpec(w, h, c, oiio.FLOAT)
-    if window:
-        spec.x, spec.y, spec.full_x, spec.full_y, spec.full_width, spec.full_height = window
-    out = oiio.ImageOutput.create(str(path))
-    assert out, oiio.geterror()
-    assert out.open(str(path), spec), out.geterror()
-    assert out.write_image(pixels), out.geterror()
-    out.close()
-    return path
-
-
-class Exr:
-    """An EXR read back: spec, channels by name (EXR sorts them by name)."""
-
-    def __init__(self, path):
-        buf = oiio.ImageBuf(str(path))
-        assert not buf.has_error, buf.geterror()
-        self.spec = buf.spec()
-        pixels = buf.get_pixels(oiio.FLOAT)
-        assert pixels is not None, buf.geterror()
-        self.names = list(self.spec.channelnames)
-        self.channels = {n: np.ascontiguousarray(pixels[:, :, i])
-                         for i, n in enumerate(self.names)}
-
-    def layers(self, names):
-        """(h, w, len(names)) float32 in the order of `names`."""
-        return np.ascontiguousarray(np.stack([self.channels[n] for n in names], axis=-1))
-
-    def attributes(self):
-        return {p.name: p.value for p in self.spec.extra_attribs
-                if p.name.startswith("filmgrain:")}
-
-
-def read_json(path):
-    with open(path) as f:
-        return json.load(f)
 
 
 def without_timing(stats):
@@ -168,7 +109,7 @@ def assert_same_as_cli(negative, exr, cli_stats):
 def scene_exr(tmp_path):
     """(path, pixels) of the 64x48 RGB scene written as a float EXR."""
     pixels = scene_pixels()
-    return write_exr(tmp_path / "scene.exr", pixels), pixels
+    return write_image(tmp_path / "scene.exr", pixels), pixels
 
 
 __all__ = ["filmgrain"]

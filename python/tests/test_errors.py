@@ -14,9 +14,9 @@ PIXELS = scene_pixels(16, 12)
 
 def cli_message(fg_bin, tmp_path, modifiers, pixels=PIXELS):
     """The CLI's error message for these modifiers on `pixels`."""
-    from conftest import write_exr
+    from conftest import write_image
 
-    path = write_exr(tmp_path / "in.exr", pixels)
+    path = write_image(tmp_path / "in.exr", pixels)
     r = run_cli(fg_bin, path, "--iscolorspace", "scene_linear", modifier_text(modifiers),
                 "-o", tmp_path / "out.exr")
     return cli_error(r)

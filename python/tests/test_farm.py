@@ -28,6 +28,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 FARM = os.path.join(ROOT, "scripts", "filmgrain-farm")
 FAST = "--filmgrain:width_mm=0.5:seed=11"
 
+sys.path.insert(0, os.path.join(ROOT, "tests"))
+from fgtest import clean_env, fg_bin, reaped, write_image  # noqa: E402,F401 (shared)
+
 
 def _load_farm():
     spec = importlib.util.spec_from_file_location(
@@ -40,19 +43,8 @@ def _load_farm():
 farm = _load_farm()
 
 
-@pytest.fixture(scope="session")
-def fg_bin():
-    path = os.environ.get("FILMGRAIN_BIN")
-    if not path:
-        pytest.fail("FILMGRAIN_BIN is not set (run through ctest, or set it)")
-    assert os.access(path, os.X_OK), path
-    return path
-
-
 def _env(fg_bin):
-    env = {k: v for k, v in os.environ.items() if k != "OCIO"}
-    env["FILMGRAIN_BIN"] = fg_bin
-    return env
+    return clean_env(FILMGRAIN_BIN=fg_bin)
 
 
 def run_cli(fg_bin, *args):
@@ -102,11 +94,7 @@ def write_plates(dirpath, frames, width=64, height=48):
     for f in frames:
         img = np.stack([0.02 + 0.5 * x / width, 0.05 + 0.4 * y / height,
                         np.full_like(x, 0.03 * f)], axis=-1)
-        out = oiio.ImageOutput.create("exr")
-        assert out.open(str(dirpath / f"plate.{f:04d}.exr"),
-                        oiio.ImageSpec(width, height, 3, oiio.FLOAT))
-        assert out.write_image(img)
-        out.close()
+        write_image(dirpath / f"plate.{f:04d}.exr", img)
 
 
 def leftovers(dirpath):
@@ -301,11 +289,10 @@ def test_lost_worker_frames_retried(fg_bin, tmp_path):
     slow = ["--wedge", "--filmgrain:stock=color-negative:width_mm=3:seed=5", "--frames", "1-4"]
     out = tmp_path / "farm"
     out.mkdir()
-    proc = subprocess.Popen([sys.executable, FARM, "--workers", "2", *slow,
-                             "-o", out / "neg.####.exr"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_env(fg_bin))
-    try:
+    with reaped(subprocess.Popen([sys.executable, FARM, "--workers", "2", *slow,
+                                  "-o", out / "neg.####.exr"],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                 env=_env(fg_bin))) as proc:
         killed = None
         deadline = time.monotonic() + 60
         while killed is None and time.monotonic() < deadline and proc.poll() is None:
@@ -329,9 +316,6 @@ def test_lost_worker_frames_retried(fg_bin, tmp_path):
             time.sleep(0.05)
         assert killed, "no CLI process seen running"
         _, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
     assert proc.returncode == 0, err
     assert "4 rendered" in err
     (tmp_path / "cli").mkdir()

@@ -7,7 +7,7 @@ import pytest
 
 import filmgrain
 from conftest import (CLI_ONLY_ATTRIBUTES, FAST_WIDTH_MM, Exr, assert_same_as_cli, render_cli,
-                      scene_pixels, write_exr)
+                      scene_pixels, write_image)
 
 
 def assert_buf_equals_cli(buf, tmp_path, cli_path):
@@ -48,7 +48,7 @@ def test_data_window_inside_the_display_window_is_placed_as_by_the_cli(fg_bin, t
     (MODEL.md 2), in the display window's scan."""
     pixels = scene_pixels(40, 30)
     window = (12, 9, 0, 0, 64, 48)
-    path = write_exr(tmp_path / "crop.exr", pixels, window=window)
+    path = write_image(tmp_path / "crop.exr", pixels, window=window)
     mods = {"stock": "paper", "seed": 5, "width_mm": FAST_WIDTH_MM}
     render_cli(fg_bin, tmp_path, path, mods)
     buf, stats = filmgrain.render_imagebuf(oiio.ImageBuf(str(path)), **mods)

@@ -12,6 +12,7 @@ import time
 
 import filmgrain
 from conftest import scene_pixels
+from fgtest import reaped
 
 # A render that takes minutes: the exact engine over a whole Super 35 frame.
 LONG_RENDER = textwrap.dedent("""
@@ -34,9 +35,8 @@ STOP_WITHIN_S = 5.0
 
 
 def test_ctrl_c_stops_a_render():
-    proc = subprocess.Popen([sys.executable, "-c", LONG_RENDER], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=dict(os.environ))
-    try:
+    with reaped(subprocess.Popen([sys.executable, "-c", LONG_RENDER], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True, env=dict(os.environ))) as proc:
         assert proc.stdout.readline().strip() == "rendering"
         time.sleep(1.0)  # well into the render
         assert proc.poll() is None, "the render ended before it was interrupted"
@@ -44,10 +44,6 @@ def test_ctrl_c_stops_a_render():
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=60)
         took = time.monotonic() - sent
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
     assert "interrupted" in out, (out, err)
     assert proc.returncode == 3, (proc.returncode, err)
     assert took < STOP_WITHIN_S, f"stopped {took:.2f} s after SIGINT"

@@ -9,7 +9,7 @@ import pytest
 import filmgrain
 from conftest import (FAST_WIDTH_MM, HEIGHT, WIDTH, Exr, assert_same_as_cli, modifier_text,
                       read_json, render_cli, run_cli,
-                      scene_pixels, write_exr)
+                      scene_pixels, write_image)
 
 # Each case: the CLI's modifiers as written on its command line, and the same
 # settings as render() keywords (Python values: floats, ints, tuples).
@@ -66,7 +66,7 @@ def test_module_equals_cli(fg_bin, tmp_path, scene_exr, case):
 
 def test_grey_input_equals_cli(fg_bin, tmp_path):
     grey = scene_pixels(channels=1)
-    path = write_exr(tmp_path / "grey.exr", grey)
+    path = write_image(tmp_path / "grey.exr", grey)
     mods = {"stock": "paper", "seed": 9, "width_mm": FAST_WIDTH_MM}
     exr, cli_stats = render_cli(fg_bin, tmp_path, path, mods)
     for pixels in (grey, grey[:, :, 0]):  # (H, W, 1) and (H, W)

@@ -6,33 +6,21 @@ Every render uses a tiny image and a small frame (width_mm) so that it takes
 well under a second.
 """
 
-import json
 import os
 import subprocess
+import sys
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# The helpers every suite shares (tests/fgtest.py); the tests import them
+# from here.
+from fgtest import Exr, clean_env, fg_bin, read_json, write_image  # noqa: E402,F401
 
 # A tiny, fast render: 32x24 pixels over a 0.5 mm frame.
 WIDTH, HEIGHT = 32, 24
 FAST = "width_mm=0.5"
-
-
-@pytest.fixture(scope="session")
-def fg_bin():
-    path = os.environ.get("FILMGRAIN_BIN")
-    if not path:
-        pytest.fail("FILMGRAIN_BIN is not set (run through ctest)")
-    assert os.access(path, os.X_OK), path
-    return path
-
-
-def clean_env(**extra):
-    """The environment without $OCIO (tests choose their config)."""
-    env = {k: v for k, v in os.environ.items() if k != "OCIO"}
-    env.update(extra)
-    return env
 
 
 @pytest.fixture
@@ -61,23 +49,6 @@ def dirs(tmp_path):
     return indir, outdir
 
 
-def write_image(path, pixels, fmt="float", attrs=None):
-    """Writes a (height, width, channels) array with OpenImageIO."""
-    pixels = np.asarray(pixels)
-    if pixels.ndim == 2:
-        pixels = pixels[:, :, None]
-    h, w, c = pixels.shape
-    spec = oiio.ImageSpec(w, h, c, fmt)
-    for k, v in (attrs or {}).items():
-        spec.attribute(k, v)
-    out = oiio.ImageOutput.create(str(path))
-    assert out, oiio.geterror()
-    assert out.open(str(path), spec), out.geterror()
-    assert out.write_image(pixels), out.geterror()
-    out.close()
-    return path
-
-
 def rgb_ramp(width=WIDTH, height=HEIGHT):
     """A scene-linear RGB ramp, 0.01 .. ~1, different in each channel."""
     x = np.linspace(0.01, 1.0, width, dtype=np.float32)
@@ -88,26 +59,6 @@ def rgb_ramp(width=WIDTH, height=HEIGHT):
     img[:, :, 2] = 0.18
     return img
 
-
-class Exr:
-    """An EXR read back: spec and channels by name (EXR sorts them)."""
-
-    def __init__(self, path):
-        buf = oiio.ImageBuf(str(path))
-        assert not buf.has_error, buf.geterror()
-        self.spec = buf.spec()
-        pixels = buf.get_pixels(oiio.FLOAT)
-        assert pixels is not None, buf.geterror()
-        self.names = list(self.spec.channelnames)
-        self.channels = {n: pixels[:, :, i] for i, n in enumerate(self.names)}
-
-    def attr(self, name):
-        return self.spec.getattribute(name)
-
-
-def read_json(path):
-    with open(path) as f:
-        return json.load(f)
 
 
 def listing(directory):

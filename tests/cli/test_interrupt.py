@@ -10,6 +10,7 @@ import time
 import pytest
 
 from conftest import clean_env, listing
+from fgtest import reaped
 
 # The wedge of color-negative (paper-scale grains) over a 6 mm frame on one
 # thread takes several seconds (tens on a slow machine): long enough to be
@@ -40,10 +41,10 @@ def wait_for_progress(proc, timeout=60):
 def test_interrupt_leaves_nothing(fg_bin, tmp_path, sig):
     out = tmp_path / "out"
     out.mkdir()
-    proc = subprocess.Popen([fg_bin, *SLOW, "-o", out / "w.exr", "--stats", out / "s.json",
-                             "--preview", out / "w.png"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=clean_env())
-    try:
+    args = [fg_bin, *SLOW, "-o", out / "w.exr", "--stats", out / "s.json", "--preview",
+            out / "w.png"]
+    with reaped(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 env=clean_env())) as proc:
         seen = wait_for_progress(proc)
         # While it renders, no file exists yet: outputs are created only
         # when written (unnamed until complete), so even SIGKILL leaves none.
@@ -52,10 +53,6 @@ def test_interrupt_leaves_nothing(fg_bin, tmp_path, sig):
         start = time.monotonic()
         _, err = proc.communicate(timeout=60)
         elapsed = time.monotonic() - start
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
     err = (seen + err).decode(errors="replace")
     assert proc.returncode == 128 + sig, err
     assert "interrupted" in err and signal.Signals(sig).name in err

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from conftest import FAST, Exr, clean_env, listing, read_json, rgb_ramp, write_image
+from fgtest import reaped
 
 MASK = (1 << 64) - 1
 
@@ -199,16 +200,11 @@ def test_sigkill_mid_frame_leaves_no_partial_file_and_resumes(fg_bin, dirs):
     args = [fg_bin, "--wedge", "--frames", "1-2", "--filmgrain:stock=color-negative:width_mm=4:tile=16",
             "--threads", "1", "--progress", "-o", outdir / "w.####.exr",
             "--stats", outdir / "w.####.json", "--skip-existing"]
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            env=clean_env())
-    try:
+    with reaped(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 env=clean_env())) as proc:
         read_until(proc, b"frame 2/2 (2)")
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
     assert listing(outdir) == ["w.0001.exr", "w.0001.json"]
     done = pixels(outdir / "w.0001.exr")
     r = subprocess.run(args, capture_output=True, text=True, env=clean_env(), timeout=300)
