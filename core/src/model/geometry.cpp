@@ -74,15 +74,18 @@ Status FrameGeometry::make(double frame_width_mm, int64_t input_width, int64_t i
 
 namespace {
 
+/// GCC's and Clang's 128-bit integer (__extension__: not ISO C++, said once).
+__extension__ typedef __int128 Int128;
+
 /// floor(a / b) and ceil(a / b) for b > 0, exactly (128-bit products).
-int64_t floor_div(__int128 a, __int128 b)
+int64_t floor_div(Int128 a, Int128 b)
 {
-    const __int128 q = a / b;
+    const Int128 q = a / b;
     return static_cast<int64_t>(q * b > a ? q - 1 : q);
 }
-int64_t ceil_div(__int128 a, __int128 b)
+int64_t ceil_div(Int128 a, Int128 b)
 {
-    const __int128 q = a / b;
+    const Int128 q = a / b;
     return static_cast<int64_t>(q * b < a ? q + 1 : q);
 }
 
@@ -94,11 +97,11 @@ Roi scan_pixels_over(const Roi& reference, int64_t scan_width, int64_t scan_heig
     // Input pixel x lies at scan position (x - ref.x_begin) * scan_width /
     // ref.width() (and likewise down).
     const Roi& r      = reference;
-    const __int128 sw = scan_width, sh = scan_height, rw = r.width(), rh = r.height();
-    return Roi { floor_div(static_cast<__int128>(input_pixels.x_begin - r.x_begin) * sw, rw),
-                 floor_div(static_cast<__int128>(input_pixels.y_begin - r.y_begin) * sh, rh),
-                 ceil_div(static_cast<__int128>(input_pixels.x_end - r.x_begin) * sw, rw),
-                 ceil_div(static_cast<__int128>(input_pixels.y_end - r.y_begin) * sh, rh) };
+    const Int128 sw = scan_width, sh = scan_height, rw = r.width(), rh = r.height();
+    return Roi { floor_div(static_cast<Int128>(input_pixels.x_begin - r.x_begin) * sw, rw),
+                 floor_div(static_cast<Int128>(input_pixels.y_begin - r.y_begin) * sh, rh),
+                 ceil_div(static_cast<Int128>(input_pixels.x_end - r.x_begin) * sw, rw),
+                 ceil_div(static_cast<Int128>(input_pixels.y_end - r.y_begin) * sh, rh) };
 }
 
 Roi FrameGeometry::frame_scan_pixels() const
