@@ -352,7 +352,8 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
         return true;
     };
     OIIO::ImageBuf dst;
-    const bool ok = IBA::filmgrain(dst, src, opts, roi, a.threads, &report.render);
+    opts.stats    = &report.render;
+    const bool ok = IBA::filmgrain(dst, src, opts, roi, a.threads);
     con.end_progress();
     report.seconds.simulate = seconds_since(t);
     if (interrupted())

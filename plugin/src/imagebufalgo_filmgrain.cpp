@@ -258,9 +258,9 @@ void set_metadata(OIIO::ImageSpec& spec, const FilmgrainOptions& opts)
 }
 
 bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
-                    const FilmgrainOptions& opts, OIIO::ROI roi, int nthreads,
-                    RenderStats* stats)
+                    const FilmgrainOptions& opts, OIIO::ROI roi, int nthreads)
 {
+    RenderStats* const stats = opts.stats;
     std::string error;
     FilmMapping film;
     if (!check_source(src, error) || !map_film(src.spec(), opts, film, error)) {
@@ -402,12 +402,12 @@ Status data_window_scan(const OIIO::ImageSpec& spec, const FilmgrainOptions& opt
 }
 
 bool filmgrain(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
-               OIIO::ROI roi, int nthreads, RenderStats* stats)
+               OIIO::ROI roi, int nthreads)
 {
     // No exception crosses the library boundary (allocation failures
     // included).
     try {
-        return filmgrain_impl(dst, src, opts, roi, nthreads, stats);
+        return filmgrain_impl(dst, src, opts, roi, nthreads);
     } catch (const std::exception& e) {
         dst.errorfmt("filmgrain: {}", e.what());
     } catch (...) {

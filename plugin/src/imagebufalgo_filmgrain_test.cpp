@@ -50,7 +50,8 @@ TEST(Operator, ChannelsWindowsAndMetadata)
     FilmgrainOptions opts    = small_options();
     OIIO::ImageBuf dst;
     RenderStats stats;
-    ASSERT_TRUE(IBA::filmgrain(dst, src, opts, {}, 0, &stats)) << dst.geterror();
+    opts.stats = &stats;
+    ASSERT_TRUE(IBA::filmgrain(dst, src, opts)) << dst.geterror();
     const OIIO::ImageSpec& spec = dst.spec();
     ASSERT_EQ(spec.nchannels, static_cast<int>(opts.stock.layers.size()));
     for (int c = 0; c < spec.nchannels; ++c)
@@ -144,7 +145,9 @@ TEST(Operator, NonFinitePixelsAreCountedAndOutputIsFinite)
     src.setpixel(5, 4, bad2);
     RenderStats stats;
     OIIO::ImageBuf dst;
-    ASSERT_TRUE(IBA::filmgrain(dst, src, small_options(), {}, 0, &stats)) << dst.geterror();
+    FilmgrainOptions with_stats = small_options();
+    with_stats.stats            = &stats;
+    ASSERT_TRUE(IBA::filmgrain(dst, src, with_stats)) << dst.geterror();
     EXPECT_EQ(stats.input.nonfinite_pixels, 2u);
     for (OIIO::ImageBuf::ConstIterator<float> it(dst); !it.done(); ++it)
         for (int c = 0; c < dst.nchannels(); ++c)

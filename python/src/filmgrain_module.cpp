@@ -214,7 +214,8 @@ py::tuple render(py::array pixels, const std::string& modifiers,
     {
         py::gil_scoped_release nogil;
         const auto t = std::chrono::steady_clock::now();
-        ok = IBA::filmgrain(dst, src, opts, roi, static_cast<int>(threads), &report.render);
+        opts.stats = &report.render;
+        ok         = IBA::filmgrain(dst, src, opts, roi, static_cast<int>(threads));
         report.seconds.simulate
             = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     }

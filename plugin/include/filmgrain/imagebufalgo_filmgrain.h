@@ -55,11 +55,9 @@ struct FilmgrainOptions {
     /// instead of silently using another film.
     Stock stock;
 
-    /// The shot. Type SceneSettings, with its documented defaults:
-    /// exposure_stops (double, stops, default 0, [-64, 64]); shutter_s
-    /// (double, seconds, default 1/48, (0, 1e7]); frame_width_mm (double,
-    /// millimetres, default 24.89 = Super 35, (0, 1e9]); seed (uint64_t,
-    /// default 0: selects the grain pattern).
+    /// The shot (SceneSettings, declared once in filmgrain/render.h with
+    /// their defaults and ranges): exposure_stops, shutter_s,
+    /// frame_width_mm, seed, frame, static_grain, edge.
     SceneSettings scene;
 
     /// The simulation engine and its knobs (EngineOptions, declared once in
@@ -89,6 +87,10 @@ struct FilmgrainOptions {
     /// about ten times a second; return false to cancel (the operator then
     /// fails with "render cancelled"). Default: none.
     ProgressCallback progress;
+
+    /// Optional: receives the render's statistics (grain counts per layer,
+    /// special input pixels, simulation time). Not owned; default: none.
+    RenderStats* stats = nullptr;
 
     /// Default options: the default preset and the documented defaults.
     FilmgrainOptions();
@@ -130,10 +132,10 @@ namespace IBA {
 /// roi: scan pixels to render (default: the data window's scan). Must lie
 ///   inside the scan pixels over the film (the box around the display and
 ///   data windows, rounded outward).
-/// stats: if not null, receives the render's statistics (grain counts per
-///   layer, special input pixels, simulation time).
+/// nthreads: worker threads (0: OpenImageIO's "threads" attribute, as
+///   every ImageBufAlgo function). Statistics: opts.stats.
 bool filmgrain(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
-               OIIO::ROI roi = {}, int nthreads = 0, RenderStats* stats = nullptr);
+               OIIO::ROI roi = {}, int nthreads = 0);
 
 /// As above, returning the result; on failure the result has the error set.
 OIIO::ImageBuf filmgrain(const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
