@@ -50,6 +50,9 @@
 #include "model/geometry.h"
 #include "kernels/grain_kernel.h"
 #include "model/image_formation.h"
+#include "kernels/coverage_grid.h"
+#include "kernels/coverage_raster.h"
+#include "kernels/coverage_scanline.h"
 #include "model/kinetics.h"
 #include "engine/kinetics_table.h"
 #include "kernels/pixel_model.h"
@@ -58,6 +61,9 @@
 
 namespace filmgrain {
 namespace {
+
+/// The exposures here never saturate (a value above any the fixtures hold).
+constexpr double kNoSaturation = 1e30;
 
 /// The rates of MODEL.md 7 (every preset uses them).
 constexpr KineticsRates kRates { 1e7, 1e6, 10.0 };
@@ -218,7 +224,8 @@ void BM_ExposureDisc(benchmark::State& state)
     static ExposureFixture fx;
     const double pitch_um = 1.0;
     const double r_um     = 0.5 * pitch_um * static_cast<double>(state.range(0)) / 4.0;
-    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, pitch_um);
+    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, pitch_um, kNoSaturation,
+                           FrameEdge::clamp);
     const auto centres = random_centres();
     size_t i  = 0;
     double sum = 0.0;
@@ -235,7 +242,8 @@ BENCHMARK(BM_ExposureDisc)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32);
 void BM_ExposureCentre(benchmark::State& state)
 {
     static ExposureFixture fx;
-    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, 1.0);
+    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, 1.0, kNoSaturation,
+                           FrameEdge::clamp);
     const auto centres = random_centres();
     size_t i  = 0;
     double sum = 0.0;
@@ -255,7 +263,8 @@ BENCHMARK(BM_ExposureCentre);
 void BM_ExposurePlaneDisc(benchmark::State& state)
 {
     static ExposureFixture fx;
-    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, 1.0);
+    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, 1.0, kNoSaturation,
+                           FrameEdge::clamp);
     FrameGeometry frame;
     if (!FrameGeometry::make(256.0 / 1000.0, 256, 256, 256, 256, frame)) {
         state.SkipWithError("frame");

@@ -16,6 +16,9 @@
 #include "model/geometry.h"
 #include "kernels/grain_kernel.h"
 #include "model/image_formation.h"
+#include "kernels/coverage_grid.h"
+#include "kernels/coverage_raster.h"
+#include "kernels/coverage_scanline.h"
 
 namespace filmgrain {
 

@@ -15,6 +15,8 @@
 
 #include "expect/develop_curve.h"
 #include "model/image_formation.h"
+#include "kernels/coverage_grid.h"
+#include "kernels/coverage_raster.h"
 #include "engine/kinetics_table.h"
 #include "util/sampling.h"
 #include "testing/test_tables.h"

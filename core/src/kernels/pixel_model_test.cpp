@@ -14,6 +14,7 @@
 #include "model/dye.h"
 #include "kernels/grain_kernel.h"
 #include "model/image_formation.h"
+#include "kernels/coverage_grid.h"
 #include "util/rng.h"
 #include "util/sampling.h"
 #include "testing/test_tables.h"

@@ -1,5 +1,7 @@
 // Tests of image formation (MODEL.md 5): exact union coverage and density.
 #include "model/image_formation.h"
+#include "kernels/coverage_grid.h"
+#include "kernels/coverage_scanline.h"
 
 #include <cmath>
 #include <iomanip>
