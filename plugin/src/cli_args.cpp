@@ -7,6 +7,8 @@
 
 #include <OpenImageIO/argparse.h>
 
+#include <nlohmann/json.hpp>
+
 #include <charconv>
 #include <cstring>
 #include <exception>
@@ -38,6 +40,7 @@ struct OptionSpec {
     std::string help;
     Handler handle;
     bool takes_modifiers = false;  ///< --filmgrain and -o accept :key=value
+    bool prints_and_exits = false;  ///< --version, --list-stocks and the like
 };
 
 /// The option name without its :modifiers.
@@ -271,23 +274,35 @@ const std::vector<OptionSpec>& option_table()
           [](CliArgs& a, const std::string&, const char*) {
               a.list_stocks = true;
               return Status();
-          } },
+          },
+          false, true },
+        { "--list-options", nullptr, "",
+          "Print every option and modifier as JSON (name, value, default, help) and exit: "
+          "what filmgrain-farm and studio tools read instead of parsing this help",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.list_options = true;
+              return Status();
+          },
+          false, true },
         { "--print-stock", nullptr, "NAME|FILE",
           "Print a stock (preset or file) as complete JSON, every key resolved, and exit",
           [](CliArgs& a, const std::string&, const char* v) {
               return set_once(!a.print_stock.empty(), "--print-stock", v,
                               "stock name", a.print_stock);
-          } },
+          },
+          false, true },
         { "--version", nullptr, "", "Print the version and exit",
           [](CliArgs& a, const std::string&, const char*) {
               a.version = true;
               return Status();
-          } },
+          },
+          false, true },
         { "--help", "-h", "", "Print this help and exit",
           [](CliArgs& a, const std::string&, const char*) {
               a.help = true;
               return Status();
-          } },
+          },
+          false, true },
     };
     return table;
 }
@@ -409,6 +424,35 @@ Status parse_command_line(int argc, const char** argv, CliArgs& out)
     }
 }
 
+std::string options_json()
+{
+    using Json = nlohmann::ordered_json;
+    Json options = Json::array();
+    for (const OptionSpec& spec : option_table())
+        options.push_back({ { "name", spec.flag },
+                            { "aliases", spec.alias ? Json::array({ spec.alias }) : Json::array() },
+                            { "value", spec.metavar },
+                            { "modifiers", spec.takes_modifiers },
+                            { "prints_and_exits", spec.prints_and_exits },
+                            { "help", spec.help } });
+    Json filmgrain = Json::array();
+    for (const ModifierDoc& m : filmgrain_modifier_docs())
+        filmgrain.push_back({ { "key", m.key },
+                              { "value", m.form },
+                              { "default", m.default_text },
+                              { "help", m.help } });
+    std::string comps;
+    for (const auto& c : exr_compressions())
+        comps += (comps.empty() ? "" : "|") + c;
+    const Json output = Json::array({ { { "key", "compression" },
+                                        { "value", comps },
+                                        { "default", OutputModifiers().compression },
+                                        { "help", "OpenEXR compression" } } });
+    const Json doc = { { "options", options },
+                       { "modifiers", { { "--filmgrain", filmgrain }, { "-o", output } } } };
+    return doc.dump(2) + "\n";
+}
+
 bool wants_help(int argc, const char** argv)
 {
     for (int i = 1; i < argc; ++i)
@@ -500,7 +544,8 @@ std::string help_text()
         << "                 [--skip-existing] [--skip-missing] [...]\n"
         << "       filmgrain --wedge --filmgrain[:key=value...] -o OUTPUT.exr [...]\n"
         << "       filmgrain --chart --filmgrain[:key=value...] -o OUTPUT.exr [...]\n"
-        << "       filmgrain --list-stocks | --print-stock NAME|FILE | --version | --help\n\n"
+        << "       filmgrain --list-stocks | --print-stock NAME|FILE | --list-options |\n"
+        << "                 --version | --help\n\n"
         << "Options:\n";
     constexpr size_t kColumn = 28;
     append_wrapped(out, pad("    INPUT", kColumn),

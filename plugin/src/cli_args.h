@@ -49,6 +49,7 @@ struct CliArgs {
     bool help        = false;
     bool version     = false;
     bool list_stocks = false;
+    bool list_options = false;  ///< --list-options: the option table as JSON
     std::string print_stock;  ///< --print-stock NAME|FILE (empty: not given)
 };
 
@@ -68,6 +69,13 @@ bool wants_help(int argc, const char** argv);
 /// default (printed from the default structs), the presets, the colour
 /// config resolution order and the exit status.
 std::string help_text();
+
+/// The options and modifiers as one JSON document (--list-options):
+/// {"options": [{"name", "aliases", "value" (the metavar, "" for a flag),
+/// "modifiers" (takes :key=value), "prints_and_exits", "help"}...],
+/// "modifiers": {"--filmgrain": [{"key", "value", "default", "help"}...],
+/// "-o": [...]}}, in --help's order.
+std::string options_json();
 
 /// Exit status of a failed run (usage errors included).
 constexpr int kExitError = 1;

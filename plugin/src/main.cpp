@@ -162,16 +162,19 @@ int run(int argc, const char** argv)
         return Console(false, false).fail(s);
     const Console con(args.quiet, ::isatty(STDERR_FILENO) != 0, args.progress);
 
-    if (args.version || args.list_stocks || !args.print_stock.empty()) {
+    if (args.version || args.list_stocks || args.list_options || !args.print_stock.empty()) {
         if (!args.input.empty() || args.wedge || args.chart || args.has_filmgrain
             || !args.output.empty())
-            return con.fail("--version, --list-stocks and --print-stock print and exit: do "
-                            "not combine them with INPUT, --wedge, --chart, --filmgrain or -o");
+            return con.fail("--version, --list-stocks, --list-options and --print-stock print "
+                            "and exit: do not combine them with INPUT, --wedge, --chart, "
+                            "--filmgrain or -o");
         if (args.version)
             std::cout << "filmgrain " << version_string() << " (OpenImageIO "
                       << OIIO_VERSION_STRING << ")\n";
         if (args.list_stocks)
             list_stocks();
+        if (args.list_options)
+            std::cout << options_json();
         if (!args.print_stock.empty())
             return print_stock(args.print_stock, con);
         return 0;

@@ -47,16 +47,16 @@ STOP_POLL_S = 0.5
 
 DEFAULT_SCHEDULER_TIMEOUT_S = 20.0
 
-# The CLI's options (filmgrain --help) that take a value. The farm must know
-# them to tell INPUT from an option's value; an option in neither set is an
-# error, not a guess. Whether the arguments make sense is the CLI's to say
-# (its --dry-run).
-CLI_VALUE_OPTIONS = {"--colorconfig", "--iscolorspace", "-d", "-o", "--frames", "--stats",
-                     "--preview", "--threads"}
-CLI_FLAGS = {"--wedge", "--chart", "--filmgrain", "--skip-existing", "--skip-missing"}
-CLI_PRINT_AND_EXIT = {"--list-stocks", "--print-stock", "--version"}
-# Options that carry :key=value modifiers on the option word itself.
-CLI_MODIFIER_OPTIONS = {"--filmgrain", "-o"}
+# The CLI's options come from the CLI itself (cli_options: its
+# --list-options table), so that the farm tells INPUT from an option's value
+# for every option the CLI has, and none it does not: an option in neither
+# the farm's nor the CLI's table is an error, not a guess. Whether the
+# arguments make sense is the CLI's to say (its --dry-run).
+# The CLI's options the farm runs itself instead of passing them on.
+CLI_OPTIONS_THE_FARM_RUNS = {
+    "--dry-run": "the farm runs the CLI's dry run itself: run the filmgrain CLI with "
+                 "--dry-run to see it",
+}
 
 # The CLI's summary of a sequence run (plugin/src/main.cpp), read to count
 # what each frame task did (a frame may have become up to date, or its input
@@ -182,8 +182,40 @@ def _positive_int(flag, value, upper=None):
     return n
 
 
-def parse_args(argv):
-    """Parses the farm's command line (see HELP). Raises UsageError."""
+def cli_options(fg_bin):
+    """The CLI's options by every spelling (`filmgrain --list-options`):
+    {name: {"value": takes a value, "modifiers": takes :key=value,
+    "exits": prints and exits}}. Raises UsageError if the CLI cannot say."""
+    try:
+        r = subprocess.run([fg_bin, "--list-options"], capture_output=True, text=True,
+                           timeout=60)
+        doc = json.loads(r.stdout) if r.returncode == 0 else None
+    except (OSError, subprocess.SubprocessError, ValueError) as e:
+        raise UsageError(f"'{fg_bin} --list-options' failed: {e}") from e
+    if doc is None:
+        raise UsageError(f"'{fg_bin} --list-options' failed (exit {r.returncode}): "
+                         f"{r.stderr.strip()} (is it the filmgrain CLI of this release?)")
+    table = {}
+    for o in doc["options"]:
+        spec = {"value": bool(o["value"]), "modifiers": bool(o["modifiers"]),
+                "exits": bool(o["prints_and_exits"])}
+        for name in [o["name"], *o["aliases"]]:
+            table[name] = spec
+    return table
+
+
+def farm_bin_argument(argv):
+    """--filmgrain-bin's value in argv, if given (read before the rest of
+    the command line, which needs the CLI's options)."""
+    for i, word in enumerate(argv[:-1]):
+        if word == "--filmgrain-bin":
+            return argv[i + 1]
+    return None
+
+
+def parse_args(argv, options):
+    """Parses the farm's command line (see HELP); `options` is the CLI's
+    table (cli_options). Raises UsageError."""
     a = FarmArgs()
     i = 0
 
@@ -223,16 +255,18 @@ def parse_args(argv):
             a.progress = True
         elif word in ("-q", "--quiet"):
             a.quiet = True
-        elif base in CLI_PRINT_AND_EXIT:
+        elif base in options and options[base]["exits"]:
             raise UsageError(f"{word}: run the filmgrain CLI itself to print and exit")
-        elif base in CLI_VALUE_OPTIONS or base in CLI_FLAGS:
-            if ":" in word and base not in CLI_MODIFIER_OPTIONS:
+        elif base in CLI_OPTIONS_THE_FARM_RUNS:
+            raise UsageError(f"{word}: {CLI_OPTIONS_THE_FARM_RUNS[base]}")
+        elif base in options:
+            if ":" in word and not options[base]["modifiers"]:
                 raise UsageError(f"{word}: {base} takes no :modifiers")
             a.given.add(base)
             if base == "--filmgrain":
                 a.filmgrain_index = len(a.cli)
             a.cli.append(word)
-            if base in CLI_VALUE_OPTIONS:
+            if options[base]["value"]:
                 v = value(word)
                 if base == "-o":
                     a.output_index = len(a.cli)
@@ -721,12 +755,12 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     con = Console(quiet=False, force_progress=False)
     try:
-        a = parse_args(argv)
-        if a.help:
+        if "-h" in argv or "--help" in argv:
             sys.stdout.write(HELP)
             return 0
+        fg_bin = resolve_filmgrain_bin(farm_bin_argument(argv))
+        a = parse_args(argv, cli_options(fg_bin))
         con = Console(a.quiet, a.progress)
-        fg_bin = resolve_filmgrain_bin(a.filmgrain_bin)
     except UsageError as e:
         con.error(e)
         return 1

@@ -14,6 +14,7 @@ thread). Each farm run with frames to render starts a 2-worker local cluster
 """
 
 import importlib.util
+import json
 import os
 import signal
 import subprocess
@@ -108,8 +109,9 @@ def test_tasks_are_the_cli_frames(fg_bin, tmp_path):
     """A frame list in INPUT: the farm's jobs are the CLI's frames in its
     order, and frame F's task is the user's command with --frames F and F's
     input file (the list in INPUT would contradict --frames F)."""
+    options = farm.cli_options(fg_bin)
     a = farm.parse_args([str(tmp_path / "p.3-1,7-11x2#.exr"), FAST, "-o",
-                         str(tmp_path / "o.#.exr"), "--skip-missing"])
+                         str(tmp_path / "o.#.exr"), "--skip-missing"], options)
     jobs = farm.dry_run(fg_bin, a.cli)
     assert [j["frame"] for j in jobs] == [3, 2, 1, 7, 9, 11]
     assert jobs[0]["output"] == str(tmp_path / "o.0003.exr")
@@ -118,12 +120,27 @@ def test_tasks_are_the_cli_frames(fg_bin, tmp_path):
         "--skip-missing", "--frames", "3"]
     todo, up_to_date, missing = farm.plan(a, jobs)
     assert (todo, up_to_date, len(missing)) == ([], [], 6)  # no plates
-    a = farm.parse_args(["--wedge", "--frames", "5-6", FAST, "-o", "o.#.exr"])
+    a = farm.parse_args(["--wedge", "--frames", "5-6", FAST, "-o", "o.#.exr"], options)
     assert farm.task_argv("fg", a, {"frame": 6, "input": "wedge"}) == [
         "fg", "--wedge", FAST, "-o", "o.#.exr", "--frames", "6"]
     assert farm.task_argv("fg", a, {"frame": None}) == ["fg", *a.cli]
     assert farm.with_modifier("--filmgrain:seed=1:roi=1,2,3,4", "roi", "0,0,1,1") \
         == "--filmgrain:seed=1:roi=0,0,1,1"
+
+
+def test_every_cli_option_is_the_cli_s(fg_bin):
+    """The farm knows the CLI's options from the CLI (--list-options), so
+    that options it never listed by hand (--ch, --subimage, --view) reach
+    the tasks with their values, and print-and-exit options are refused."""
+    options = farm.cli_options(fg_bin)
+    listed = json.loads(run_cli(fg_bin, "--list-options").stdout)
+    assert {o["name"] for o in listed["options"]} <= set(options)
+    assert options["--ch"]["value"] and not options["--wedge"]["value"]
+    assert options["--filmgrain"]["modifiers"] and options["--list-stocks"]["exits"]
+    a = farm.parse_args(["in.exr", "--ch", "R,G,B", "--subimage", "beauty", "--view", "left",
+                         FAST, "-o", "o.exr"], options)
+    assert a.cli == ["in.exr", "--ch", "R,G,B", "--subimage", "beauty", "--view", "left", FAST,
+                     "-o", "o.exr"]
 
 
 # --- Usage errors: clear, quick, before any cluster -------------------------
@@ -138,6 +155,9 @@ def test_tasks_are_the_cli_frames(fg_bin, tmp_path):
     (["--wedge", FAST, "-o", "o.exr", "--filmgrain-bin", "/nonexistent/filmgrain"],
      "filmgrain CLI '/nonexistent/filmgrain' not found"),
     (["--version"], "--version: run the filmgrain CLI itself"),
+    (["--list-options"], "--list-options: run the filmgrain CLI itself"),
+    (["--wedge", FAST, "-o", "o.exr", "--dry-run"],
+     "--dry-run: the farm runs the CLI's dry run itself"),
     # The CLI's own messages, from its --dry-run:
     (["--wedge", FAST, "--frames", "1-3"], "no output given: -o FILE.exr is required"),
     (["--wedge", "-o", "o.exr"], "no --filmgrain command given"),

@@ -1,4 +1,4 @@
-"""filmgrain --help, --version, --list-stocks, --print-stock."""
+"""filmgrain --help, --list-options, --version, --list-stocks, --print-stock."""
 
 import json
 import re
@@ -12,7 +12,7 @@ MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "edge", 
 OPTIONS = ["--wedge", "--chart", "--subimage", "--view", "--ch", "--colorconfig", "--iscolorspace",
            "--ocolorspace", "--filmgrain", "-d", "-o",
            "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
-           "--list-stocks", "--print-stock", "--version", "--help"]
+           "--list-stocks", "--list-options", "--print-stock", "--version", "--help"]
 
 
 def modifier_lines(help_text):
@@ -52,6 +52,26 @@ def test_help_lists_every_option_and_modifier_with_default(run):
     assert "Exit status" in text
     # -h is the same.
     assert run("-h").stdout == text
+
+
+def test_list_options_is_the_help_as_json(run):
+    """--list-options: the same options and modifiers --help lists, with the
+    same defaults, as JSON (what filmgrain-farm reads)."""
+    doc = json.loads(run("--list-options").stdout)
+    names = [o["name"] for o in doc["options"]]
+    spellings = names + [a for o in doc["options"] for a in o["aliases"]]
+    assert sorted(spellings) == sorted(OPTIONS + ["-h"])
+    by_name = {o["name"]: o for o in doc["options"]}
+    assert by_name["--threads"]["value"] == "N" and by_name["--wedge"]["value"] == ""
+    assert [n for n in names if by_name[n]["modifiers"]] == ["--filmgrain", "-o"]
+    assert sorted(n for n in names if by_name[n]["prints_and_exits"]) == sorted(
+        ["--list-stocks", "--list-options", "--print-stock", "--version", "--help"])
+    mods = {m["key"]: m for m in doc["modifiers"]["--filmgrain"]}
+    assert sorted(mods) == sorted(MODIFIERS)
+    help_mods = modifier_lines(run("--help").stdout)
+    for key, m in mods.items():  # the default --help prints, word for word
+        assert f"Default: {m['default']}." in help_mods[key], key
+    assert doc["modifiers"]["-o"][0]["default"] == "piz"
 
 
 def test_help_wins_over_other_errors(run):
