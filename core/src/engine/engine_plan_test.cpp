@@ -135,6 +135,37 @@ TEST(EnginePlan, OnlyTheUnlitLayersTakeTheFogPath)
     EXPECT_TRUE(plan[2].unlit && all_fog(plan[2]));
 }
 
+TEST(EnginePlan, FramesAndSeedsShareOneDevelopTable)
+{
+    // The P(develop | N) table's stream does not depend on the seed or the
+    // frame: every frame of a sequence reads the same table (its error the
+    // same on every frame; built once per process). Asserted on the tables
+    // the plans hold, value for value (their serialisation).
+    Stock stock;
+    ASSERT_TRUE(load_stock("color-negative", stock));
+    RenderSettings settings;
+    settings.kinetics = KineticsMethod::table;
+    const Plate grey(48, 32, 0.18f, 0.18f, 0.18f);
+    const auto tables = [&](uint64_t seed, int64_t frame) {
+        SceneSettings scene;
+        scene.frame_width_mm = 1.2;
+        scene.seed           = seed;
+        scene.frame          = frame;
+        std::vector<std::string> out;
+        for (const LayerPlan& layer : plan_of(stock, scene, grey, settings))
+            for (const PopulationPlan& pp : layer.populations) {
+                EXPECT_EQ(pp.kinetics, KineticsMethod::table);
+                EXPECT_TRUE(pp.table);
+                out.push_back(pp.table ? pp.table->serialize() : std::string());
+            }
+        return out;
+    };
+    const std::vector<std::string> a = tables(7, 1001);
+    ASSERT_FALSE(a.empty());
+    EXPECT_EQ(tables(7, 1002), a);
+    EXPECT_EQ(tables(8, 1001), a);
+}
+
 TEST(EnginePlan, WhereTheRenderReadsTheWholeFrameAROIDecidesAsTheFrameDoes)
 {
     // vision3-500t spreads light, so a render reads the whole frame

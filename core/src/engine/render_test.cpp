@@ -307,33 +307,6 @@ TEST(Render, EachFrameHasItsOwnGrainUnlessStatic)
     EXPECT_NE(frame_seed(7, -1), frame_seed(7, 1));
 }
 
-TEST(Render, FramesAndSeedsShareOneDevelopTable)
-{
-    // The P(develop | N) table's stream does not depend on the seed or the
-    // frame: every frame of a sequence uses the same table (its error the
-    // same on every frame; built once per process). The reason names the
-    // table's largest node error, a property of its stream.
-    TestScene s = small_scene();
-    RenderSettings settings;
-    settings.kinetics = KineticsMethod::table;
-    const auto reasons = [&](uint64_t seed, int64_t frame) {
-        s.scene.seed  = seed;
-        s.scene.frame = frame;
-        RenderStats stats;
-        render_scene(s, settings, &stats);
-        std::vector<std::string> out;
-        for (const auto& layer : stats.layers) {
-            const size_t at = layer.reason.find("largest node error");
-            EXPECT_NE(at, std::string::npos) << layer.reason;
-            out.push_back(layer.reason.substr(at, 40));
-        }
-        return out;
-    };
-    const auto a = reasons(7, 1001);
-    EXPECT_EQ(reasons(7, 1002), a);
-    EXPECT_EQ(reasons(8, 1001), a);
-}
-
 TEST(Render, ScanResolutionIsIndependentOfInputResolution)
 {
     const TestScene s = small_scene();
