@@ -192,11 +192,11 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
     j["engine"]   = { { "engine", engine_name(e.engine) },
                       { "tolerance", e.tolerance },
                       { "kinetics", e.kinetics ? kinetics_method_name(*e.kinetics) : "" },
-                      { "photons", e.exposure_method ? exposure_method_name(*e.exposure_method) : "" },
+                      { "photons", e.photons ? exposure_method_name(*e.photons) : "" },
                       { "coverage", e.coverage ? coverage_method_name(*e.coverage) : "" },
                       { "grains", e.grains ? grain_method_name(*e.grains) : "" },
                       { "scale", e.scale ? scale_method_name(*e.scale) : "" },
-                      { "samples", e.coverage_samples } };
+                      { "samples", e.samples } };
     const FilmgrainCommand& cmd = a.filmgrain;
     j["scan"]     = { opts.scan_width, opts.scan_height };
     j["roi"]      = cmd.has_roi ? Json { cmd.roi_x, cmd.roi_y, cmd.roi_width, cmd.roi_height }

@@ -348,7 +348,7 @@ bool parse_kinetics_value(std::string_view v, FilmgrainCommand& cmd, std::string
 bool parse_photons_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     return parse_choice(v, kExposureMethods, exposure_method_name, "exposure sampling",
-                        cmd.engine_options.exposure_method, why);
+                        cmd.engine_options.photons, why);
 }
 
 bool parse_coverage_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
@@ -373,7 +373,7 @@ bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     int64_t n = 0;
     if (!parse_int_in(v, 1, 256, n, why))
         return false;
-    cmd.engine_options.coverage_samples = static_cast<int>(n);
+    cmd.engine_options.samples = static_cast<int>(n);
     return true;
 }
 

@@ -95,7 +95,7 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
     rs.engine     = settings.engine;
     if (settings.kinetics) {
         rs.kinetics        = settings.kinetics;
-        rs.exposure_method = ExposureMethod::disc;
+        rs.photons = ExposureMethod::disc;
         rs.coverage        = CoverageMethod::exact;
     }
     rs.nthreads   = settings.nthreads;

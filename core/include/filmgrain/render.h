@@ -171,15 +171,17 @@ struct EngineOptions {
     /// bias of a patch-mean density that a path may add. (0, 1].
     double tolerance = 0.002;
     /// Expert overrides of the engine's choices (fast and auto only; the
-    /// exact engine refuses them). Unset: the engine decides.
+    /// exact engine refuses them). Unset: the engine decides. Each is named
+    /// as its --filmgrain modifier (and Python keyword).
     std::optional<KineticsMethod> kinetics;
-    std::optional<ExposureMethod> exposure_method;
+    std::optional<ExposureMethod> photons;  ///< photons=: disc or centre
     std::optional<CoverageMethod> coverage;
     std::optional<GrainMethod> grains;
     std::optional<ScaleMethod> scale;
-    /// Sub-scanlines per pixel row for scanline coverage, or sample rows per
-    /// pixel for raster coverage; 0: the engine's. [0, 256].
-    int coverage_samples = 0;
+    /// samples=: sub-scanlines per pixel row for scanline coverage, sample
+    /// rows per pixel for raster coverage, or a dye layer's samples per
+    /// pixel; 0: the engine's. [0, 256].
+    int samples = 0;
 };
 
 /// How to render: engine, scan resolution, region, threads.

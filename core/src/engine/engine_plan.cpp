@@ -320,8 +320,8 @@ Status plan_inhibitors(const PlanContext& c, const std::vector<LayerExposure>& e
 /// centre in the fast engine, unless the settings say.
 ExposureMethod choose_exposure(const PlanContext& c)
 {
-    if (c.settings.exposure_method)
-        return *c.settings.exposure_method;
+    if (c.settings.photons)
+        return *c.settings.photons;
     return c.fast ? ExposureMethod::centre : ExposureMethod::disc;
 }
 
@@ -345,8 +345,8 @@ void choose_first_coverage(const PlanContext& c, const Layer& layer, LayerPlan& 
         1.0, 256.0));
     if (c.settings.coverage)
         plan.coverage = *c.settings.coverage;
-    if (c.settings.coverage_samples > 0)
-        plan.coverage_samples = c.settings.coverage_samples;
+    if (c.settings.samples > 0)
+        plan.coverage_samples = c.settings.samples;
 }
 
 /// A layer's plan before its kinetics: its populations' grains and rates,
@@ -484,8 +484,8 @@ void choose_dye_image(const PlanContext& c, std::vector<LayerPlan>& out)
             std::ceil(per_radius * std::max(c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um)
                       / smallest_cloud_um),
             c.exact ? 4.0 : 2.0, c.exact ? 64.0 : 16.0));
-        if (c.settings.coverage_samples > 0)  // samples=N (not for exact: validated)
-            plan.dye_samples = c.settings.coverage_samples;
+        if (c.settings.samples > 0)  // samples=N (not for exact: validated)
+            plan.dye_samples = c.settings.samples;
         plan.error_estimate *= cloud_area_factor(layer);
     }
 }
@@ -510,8 +510,8 @@ void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bou
             plan.coverage = CoverageMethod::raster;
         if (plan.coverage != CoverageMethod::raster)
             continue;
-        plan.coverage_samples = c.settings.coverage_samples > 0
-                                    ? c.settings.coverage_samples
+        plan.coverage_samples = c.settings.samples > 0
+                                    ? c.settings.samples
                                     : raster_samples(pitch_um, smallest_radius_um, budget, c.fast);
         plan.error_estimate += raster_bias(plan.coverage_samples, pitch_um, smallest_radius_um);
     }

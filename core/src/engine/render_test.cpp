@@ -65,7 +65,7 @@ std::vector<std::pair<const char*, RenderSettings>> engine_variants()
     // Its exposure integrated over each disc (photons=disc) instead of
     // read at the centre: it reads the input image, not a filled plane.
     kernel_disc_exposure                 = auto_kernel;
-    kernel_disc_exposure.exposure_method = ExposureMethod::disc;
+    kernel_disc_exposure.photons = ExposureMethod::disc;
     return { { "exact", exact },
              { "auto", automatic },
              { "auto scale=grain", auto_grain },
@@ -126,7 +126,7 @@ TEST(Render, EarlyStopIsBitIdenticalToTheExactEngine)
     RenderSettings early;
     early.engine          = Engine::automatic;
     early.kinetics        = KineticsMethod::early_stop;
-    early.exposure_method = ExposureMethod::disc;
+    early.photons = ExposureMethod::disc;
     early.coverage        = CoverageMethod::exact;
     RenderStats se, sl;
     const auto a = render_scene(s, exact, &se);

@@ -155,14 +155,14 @@ Status RenderSettings::validate() const
 {
     if (!(tolerance > 0.0 && tolerance <= 1.0))
         return Status::errorf("tolerance = ", tolerance, ": must be in (0, 1]");
-    if (coverage_samples < 0 || coverage_samples > 256)
-        return Status::errorf("coverage samples = ", coverage_samples, ": must be in [0, 256]");
+    if (samples < 0 || samples > 256)
+        return Status::errorf("samples = ", samples, ": must be in [0, 256]");
     if (tile_size_px < 1 || tile_size_px > 4096)
         return Status::errorf("tile size = ", tile_size_px, ": must be in [1, 4096]");
     if (nthreads < 0)
         return Status::errorf("nthreads = ", nthreads, ": must be >= 0");
     if (engine == Engine::exact
-        && (kinetics || exposure_method || coverage || coverage_samples || grains || scale))
+        && (kinetics || photons || coverage || samples || grains || scale))
         return Status::error("the exact engine is the reference: its kinetics, exposure, "
                              "coverage, grain and scale methods cannot be overridden (use engine=fast "
                              "or auto)");

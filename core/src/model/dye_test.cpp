@@ -433,12 +433,12 @@ TEST(Dye, SamplingConverges)
     // samples grow, and auto's is reported in its stats' path.
     const TestScene s = dye_scene(CloudProfile::disc, 1.0, 0.8, 0.18f);
     RenderSettings fine;
-    fine.coverage_samples = 64;
+    fine.samples = 64;
     const auto ref        = render_scene(s, fine);
     double previous       = 1e300;
     for (int samples : { 2, 4, 8, 16 }) {
         RenderSettings settings;
-        settings.coverage_samples = samples;
+        settings.samples = samples;
         const auto d              = render_scene(s, settings);
         double rms                = 0.0;
         for (size_t i = 0; i < d.size(); ++i)

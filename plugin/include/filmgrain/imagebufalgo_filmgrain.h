@@ -65,9 +65,9 @@ struct FilmgrainOptions {
     /// Engine::automatic, "auto": the paths the scene needs within
     /// `tolerance`; Engine::exact is the reference), tolerance (density
     /// error budget of the approximate paths, default 0.002, (0, 1]), and
-    /// the expert overrides kinetics, exposure_method, coverage, grains
+    /// the expert overrides kinetics, photons, coverage, grains
     /// (std::optional, unset: the engine decides; not with Engine::exact)
-    /// and coverage_samples (0: the engine's choice; [0, 256]).
+    /// and samples (0: the engine's choice; [0, 256]).
     EngineOptions engine_options;
 
     /// Scan width in pixels over the whole frame. int64_t; default 0 =
