@@ -21,6 +21,7 @@
 #include "filmgrain/ocio.h"
 #include "filmgrain/version.h"
 #include "filmgrain/wedge.h"
+#include "util/parse_number.h"
 
 namespace filmgrain::cli {
 
@@ -71,13 +72,12 @@ Status set_once(bool already, const char* flag, const char* value, const char* w
 
 Status parse_threads(const char* value, int& out)
 {
-    const char* end = value + std::strlen(value);
-    int n           = 0;
-    const auto r    = std::from_chars(value, end, n, 10);
-    if (r.ec != std::errc() || r.ptr != end || n < 0 || n > 4096)
+    uint64_t n = 0;
+    std::string why;
+    if (!parse_count(value, 4096, n, why))
         return Status::errorf("--threads ", value,
                               ": expected a whole number of threads in [0, 4096] (0: all)");
-    out = n;
+    out = static_cast<int>(n);
     return {};
 }
 

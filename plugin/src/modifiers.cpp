@@ -6,6 +6,7 @@
 // under another. Ranges of the scene settings are checked by the core's
 // SceneSettings::validate(), the one place they are defined.
 #include "modifiers.h"
+#include "util/parse_number.h"
 
 #include <charconv>
 #include <climits>
@@ -52,60 +53,6 @@ std::string format_number(double v)
     return out.str();
 }
 
-/// A finite decimal number, fully consumed. An optional leading '+' is
-/// accepted (exposure=+1). On failure `why` says what is wrong.
-bool parse_double(std::string_view s, double& out, std::string& why)
-{
-    if (!s.empty() && s[0] == '+' && s.size() > 1
-        && ((s[1] >= '0' && s[1] <= '9') || s[1] == '.'))
-        s.remove_prefix(1);
-    double v          = 0.0;
-    const char* end   = s.data() + s.size();
-    const auto result = std::from_chars(s.data(), end, v, std::chars_format::general);
-    if (result.ec == std::errc::result_out_of_range) {
-        why = "out of the range of a double";
-        return false;
-    }
-    if (result.ec != std::errc() || result.ptr != end) {
-        why = "not a decimal number";
-        return false;
-    }
-    if (!std::isfinite(v)) {
-        why = "not a finite number";
-        return false;
-    }
-    out = v;
-    return true;
-}
-
-/// A non-negative whole number in [0, max], decimal digits only (no sign,
-/// no spaces), fully consumed.
-bool parse_count(std::string_view s, uint64_t max, uint64_t& out, std::string& why)
-{
-    if (s.empty()) {
-        why = "empty number";
-        return false;
-    }
-    for (char c : s)
-        if (c < '0' || c > '9') {
-            why = "not a non-negative whole number (decimal digits only)";
-            return false;
-        }
-    uint64_t v        = 0;
-    const char* end   = s.data() + s.size();
-    const auto result = std::from_chars(s.data(), end, v, 10);
-    if (result.ec == std::errc::result_out_of_range || (result.ec == std::errc() && v > max)) {
-        why = "too large (at most " + std::to_string(max) + ")";
-        return false;
-    }
-    if (result.ec != std::errc() || result.ptr != end) {
-        why = "not a non-negative whole number";
-        return false;
-    }
-    out = v;
-    return true;
-}
-
 /// A whole number in [lo, hi] (lo >= 0).
 bool parse_int_in(std::string_view s, int64_t lo, int64_t hi, int64_t& out, std::string& why)
 {
@@ -143,7 +90,7 @@ bool parse_stock(std::string_view v, FilmgrainCommand& cmd, std::string&)
 
 bool parse_exposure(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    return parse_double(v, cmd.scene.exposure_stops, why);
+    return parse_decimal(v, cmd.scene.exposure_stops, why);
 }
 
 /// Seconds as a decimal number or a fraction N/D (shutter=1/48).
@@ -151,10 +98,10 @@ bool parse_shutter(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     const size_t slash = v.find('/');
     if (slash == std::string_view::npos)
-        return parse_double(v, cmd.scene.shutter_s, why);
+        return parse_decimal(v, cmd.scene.shutter_s, why);
     double num = 0.0, den = 0.0;
-    if (!parse_double(v.substr(0, slash), num, why)
-        || !parse_double(v.substr(slash + 1), den, why)) {
+    if (!parse_decimal(v.substr(0, slash), num, why)
+        || !parse_decimal(v.substr(slash + 1), den, why)) {
         why = "not a number or a fraction N/D of two numbers";
         return false;
     }
@@ -219,7 +166,7 @@ bool parse_edge(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     cmd.has_width_mm = true;
-    return parse_double(v, cmd.scene.frame_width_mm, why);
+    return parse_decimal(v, cmd.scene.frame_width_mm, why);
 }
 
 bool parse_scan(std::string_view v, FilmgrainCommand& cmd, std::string& why)
@@ -295,7 +242,7 @@ bool parse_engine_value(std::string_view v, FilmgrainCommand& cmd, std::string& 
 bool parse_tolerance(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     double t = 0.0;
-    if (!parse_double(v, t, why))
+    if (!parse_decimal(v, t, why))
         return false;
     if (!(t > 0.0 && t <= 1.0)) {
         why = "must be in (0, 1] (a density error budget)";

@@ -11,11 +11,13 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "model/dye.h"
+#include "util/parse_number.h"
 #include "fit.h"
 
 namespace sm = filmgrain::sensitometry;
@@ -261,9 +263,10 @@ int main(int argc, char** argv)
         };
         const auto integer = [&](const char* what, long lo, long hi) -> long {
             const std::string v = next(what);
-            char* end           = nullptr;
-            const long x        = std::strtol(v.c_str(), &end, 10);
-            if (end == v.c_str() || *end || x < lo || x > hi) {
+            uint64_t x          = 0;
+            std::string why;
+            if (!filmgrain::parse_count(v, static_cast<uint64_t>(hi), x, why)
+                || x < static_cast<uint64_t>(lo)) {
                 std::cerr << "filmgrain-fit: " << a << " " << v << ": must be an integer in ["
                           << lo << ", " << hi << "]\n";
                 std::exit(2);
@@ -272,9 +275,9 @@ int main(int argc, char** argv)
         };
         const auto number = [&](const char* what, double lo, double hi) -> double {
             const std::string v = next(what);
-            char* end           = nullptr;
-            const double x      = std::strtod(v.c_str(), &end);
-            if (end == v.c_str() || *end || !(x >= lo && x <= hi)) {
+            double x            = NAN;
+            std::string why;
+            if (!filmgrain::parse_decimal(v, x, why) || !(x >= lo && x <= hi)) {
                 std::cerr << "filmgrain-fit: " << a << " " << v << ": must be a number in [" << lo
                           << ", " << hi << "]\n";
                 std::exit(2);
@@ -286,9 +289,10 @@ int main(int argc, char** argv)
             const std::string v = next("LAYER=FRACTION,...");
             for (const std::string& item : split_commas(a, v)) {
                 const size_t eq = item.find('=');
-                char* end       = nullptr;
-                const double x  = eq == std::string::npos ? NAN : std::strtod(item.c_str() + eq + 1, &end);
-                if (eq == 0 || eq == std::string::npos || *end || end == item.c_str() + eq + 1
+                double x        = NAN;
+                std::string why;
+                if (eq == 0 || eq == std::string::npos
+                    || !filmgrain::parse_decimal(std::string_view(item).substr(eq + 1), x, why)
                     || !(x >= 0.0 && x <= 1.0) || out.count(item.substr(0, eq))) {
                     std::cerr << "filmgrain-fit: " << a << " " << v << ": '" << item
                               << "' is not LAYER=FRACTION with a fraction in [0, 1] (each layer once)\n";
@@ -308,12 +312,13 @@ int main(int argc, char** argv)
             measure_path = next("a stock");
         } else if (a == "--seed") {
             const std::string v = next("a number");
-            char* end           = nullptr;
-            opt.seed            = std::strtoull(v.c_str(), &end, 10);
-            if (end == v.c_str() || *end) {
+            uint64_t seed       = 0;
+            std::string why;
+            if (!filmgrain::parse_count(v, UINT64_MAX, seed, why)) {
                 std::cerr << "filmgrain-fit: --seed " << v << ": not an unsigned integer\n";
                 return 2;
             }
+            opt.seed = seed;
         } else if (a == "--populations") {
             opt.populations = static_cast<int>(integer("N", 1, 4));
         } else if (a == "--starts") {

@@ -2,7 +2,6 @@
 // and read like a densitometer. Writes CSV for every curve and
 // results.json with every derived number, then runs plot.py, which draws
 // the PNG plots and writes summary.md. Usage: see --help.
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "util/parse_number.h"
 #include "analysis.h"
 #include "expect/boolean_model.h"
 #include "filmgrain/render.h"
@@ -665,12 +665,11 @@ int main(int argc, char** argv)
             return argv[++i];
         };
         // A whole number in [lo, hi], or exit 2 naming the option.
-        const auto integer = [&](unsigned long long lo, unsigned long long hi) {
+        const auto integer = [&](uint64_t lo, uint64_t hi) {
             const std::string v = value();
-            char* end           = nullptr;
-            errno               = 0;
-            const unsigned long long x = std::strtoull(v.c_str(), &end, 10);
-            if (v.empty() || v[0] == '-' || *end || errno == ERANGE || x < lo || x > hi) {
+            uint64_t x          = 0;
+            std::string why;
+            if (!filmgrain::parse_count(v, hi, x, why) || x < lo) {
                 std::cerr << "filmgrain-sensitometry: " << a << " " << v
                           << ": must be a whole number in [" << lo << ", " << hi << "]\n";
                 std::exit(2);
