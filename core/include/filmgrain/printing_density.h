@@ -52,9 +52,6 @@ inline constexpr Density3 kAdxGains = { 1.00, 0.92, 0.95 };
 /// as scene-linear 0.18 in every channel: ADX16 7120, ADX10 445.
 inline constexpr double kAdxGreyCdd = 0.70;
 
-/// The scene-linear grey a stock is timed on (MODEL.md 2: an 18% grey card).
-inline constexpr double kTimingGrey = 0.18;
-
 /// One ADX encoding: code value = offset + scale * CDD, in [0, max_code],
 /// stored as code value / max_code (what OCIO's ADX10 / ADX16 colour spaces
 /// read).

@@ -162,6 +162,11 @@ struct StatusMToApd {
     std::array<double, 3> offset {};
 };
 
+/// The scene-linear value of MODEL.md 2's 18% grey card: it receives a
+/// stock's exposure_at_grey_lxs, and ADX's timing (MODEL.md 11) puts the
+/// stock's density of it on CDD 0.70.
+inline constexpr double kGreyValue = 0.18;
+
 /// A film stock: its layers and its processing (MODEL.md 2, 4, 5).
 struct Stock {
     std::string name        = "unnamed";

@@ -16,8 +16,6 @@ namespace filmgrain {
 
 /// Incident photons per square micrometre per lux-second at 555 nm.
 inline constexpr double kPhotonsPerUm2PerLxs = 4.09e3;
-/// The scene-linear value that receives exposure_at_grey_lxs.
-inline constexpr double kGreyValue = 0.18;
 
 /// Exposure per unit of scene-linear value, lux-seconds:
 /// H = v / 0.18 * exposure_at_grey_lxs * 2^stops.

@@ -127,7 +127,7 @@ Status stock_adx_transform(const Stock& stock, const SceneSettings& scene,
         const size_t l = static_cast<size_t>(layers[c]);
         dmin[c]        = curves[l].min_density();
         if (options.timing == AdxTiming::grey)
-            grey[c] = curves[l].density_at(kTimingGrey * stock.layers[l].neutral_weight());
+            grey[c] = curves[l].density_at(kGreyValue * stock.layers[l].neutral_weight());
     }
     out = make_adx_transform(map, layers, dmin, gains,
                              options.timing == AdxTiming::grey ? &grey : nullptr);
