@@ -245,6 +245,14 @@ const std::vector<OptionSpec>& option_table()
               a.dry_run = true;
               return Status();
           } },
+        { "--report-json", nullptr, "",
+          "Print on stdout, one JSON object per line, what became of each image as it ends "
+          "(frame: null for one image; output; outcome: rendered, up_to_date or missing_input; "
+          "seconds). For scripts and farms. Default: off",
+          [](CliArgs& a, const std::string&, const char*) {
+              a.report_json = true;
+              return Status();
+          } },
         { "--stats", nullptr, "FILE.json",
           "Also write render statistics as JSON (timings, grain counts, input pixels)",
           [](CliArgs& a, const std::string&, const char* v) {
@@ -498,6 +506,9 @@ Status validate_render_args(const CliArgs& a)
                               "; --preview is always timed on grey)");
     if (a.output.empty())
         return Status::error("no output given: -o FILE.exr is required");
+    if (a.dry_run && a.report_json)
+        return Status::error("--report-json reports what each render became; --dry-run renders "
+                             "nothing and prints its own JSON lines: give one or the other");
     // oiiotool's modifiers go on the option: -o:compression=zip out.exr.
     const size_t colon = a.output.find(':');
     if (colon != std::string::npos && lowercase_extension(a.output.substr(0, colon)) == ".exr")

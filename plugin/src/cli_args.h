@@ -38,6 +38,7 @@ struct CliArgs {
     bool skip_existing = false;  ///< --skip-existing
     bool skip_missing  = false;  ///< --skip-missing
     bool dry_run       = false;  ///< --dry-run
+    bool report_json   = false;  ///< --report-json
 
     std::string stats_path;  ///< --stats FILE.json
     std::string preview_path;  ///< --preview FILE.png

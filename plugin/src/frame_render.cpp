@@ -159,6 +159,16 @@ Status check_outputs_spare_inputs(const CliArgs& a, const FrameJob& job)
     return {};
 }
 
+const char* frame_outcome_name(FrameOutcome outcome)
+{
+    switch (outcome) {
+    case FrameOutcome::rendered: return "rendered";
+    case FrameOutcome::up_to_date: return "up_to_date";
+    case FrameOutcome::missing: return "missing_input";
+    }
+    return "rendered";
+}
+
 std::string format_seconds(double s)
 {
     std::ostringstream out;

@@ -60,6 +60,9 @@ bool up_to_date(const FrameJob& job, const std::string& hash);
 
 enum class FrameOutcome { rendered, up_to_date, missing };
 
+/// The outcome as --report-json names it: rendered, up_to_date, missing_input.
+const char* frame_outcome_name(FrameOutcome outcome);
+
 /// Renders one image (a single image, or one frame of a sequence) and
 /// writes its outputs all-or-nothing. Errors are returned; an interruption
 /// is reported as Status "interrupted" (the caller checks interrupted()).

@@ -129,6 +129,7 @@ int render(const CliArgs& a, const Console& con)
         con.set_frame(i, sequence ? jobs.size() : 0, job.frame);
         if (Status s = check_outputs_spare_inputs(a, job); !s)
             return con.fail(where + s.message());
+        const auto t_frame   = Clock::now();
         FrameOutcome outcome = FrameOutcome::rendered;
         const Status s       = render_one(ctx, job, outcome);
         if (interrupted())
@@ -141,6 +142,15 @@ int render(const CliArgs& a, const Console& con)
         rendered += outcome == FrameOutcome::rendered;
         skipped += outcome == FrameOutcome::up_to_date;
         missing += outcome == FrameOutcome::missing;
+        if (a.report_json)
+            std::cout << nlohmann::ordered_json {
+                { "frame", job.frame ? nlohmann::ordered_json(*job.frame)
+                                     : nlohmann::ordered_json(nullptr) },
+                { "output", job.output },
+                { "outcome", frame_outcome_name(outcome) },
+                { "seconds", seconds_since(t_frame) } }
+                    .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace)
+                      << std::endl;
     }
     if (sequence)
         con.info("sequence of " + std::to_string(jobs.size()) + " frames: "

@@ -30,7 +30,6 @@ workers need distributed and the CLI, not this package.
 
 import json
 import os
-import re
 import shutil
 import signal
 import subprocess
@@ -56,14 +55,13 @@ DEFAULT_SCHEDULER_TIMEOUT_S = 20.0
 CLI_OPTIONS_THE_FARM_RUNS = {
     "--dry-run": "the farm runs the CLI's dry run itself: run the filmgrain CLI with "
                  "--dry-run to see it",
+    "--report-json": "the farm reads each task's report itself and prints what became of "
+                     "the frames in its summary",
 }
 
-# The CLI's summary of a sequence run (plugin/src/main.cpp), read to count
-# what each frame task did (a frame may have become up to date, or its input
-# gone, since the dry run).
-SEQUENCE_SUMMARY_RE = re.compile(
-    r"sequence of \d+ frames: (\d+) rendered, (\d+) up to date \(skipped\), "
-    r"(\d+) missing input \(skipped\)")
+# What the CLI's --report-json says of each image (one JSON line on stdout
+# per image it ended): the farm counts the outcomes from these.
+REPORT_OUTCOMES = ("rendered", "up_to_date", "missing_input")
 
 # The keys of each line of the CLI's --dry-run (filmgrain --help).
 DRY_RUN_KEYS = ("frame", "input", "output", "stats", "preview", "input_exists", "error",
@@ -81,7 +79,8 @@ The frames and their files are the CLI's: 'filmgrain ... --dry-run' lists
 them on this machine first (its errors are printed, exit 1), and frames it
 finds up to date (--skip-existing) or without input (--skip-missing) are
 skipped here. Each other frame is one task that runs the filmgrain CLI with
-the same arguments and --frames F: the outputs are the CLI's, bit for bit.
+the same arguments, --frames F and --report-json (what became of the frame):
+the outputs are the CLI's, bit for bit.
 A task whose worker is lost is run again on another worker (the scheduler's
 distributed.scheduler.allowed-failures, default 3 losses); an error of the
 CLI (a missing input, a bad setting) is not retried: the run stops, the CLI
@@ -369,7 +368,7 @@ def task_argv(fg_bin, a, job, cli=None):
     (a list in INPUT, plate.1-10#.exr, would contradict --frames F; the file
     is the one the CLI reads for F, so output and settings hash are the
     same)."""
-    cli = list(a.cli if cli is None else cli)
+    cli = list(a.cli if cli is None else cli) + ["--report-json"]
     if job["frame"] is None:
         return [fg_bin] + cli
     if a.input_index is not None:
@@ -397,7 +396,7 @@ def modifier(word, key):
 
 def run_cli_task(argv, env_overrides, stop_event_name):
     """Runs the CLI (argv[0]) to completion on this worker and returns
-    {"rc", "stderr", "host", "seconds"}. Terminates it (SIGTERM: it leaves
+    {"rc", "stdout", "stderr", "host", "seconds"}. Terminates it (SIGTERM: it leaves
     no output) when the run's stop event is set, and it dies with this worker
     process (PR_SET_PDEATHSIG). Never raises for a CLI failure (no retry)."""
     import ctypes
@@ -405,7 +404,7 @@ def run_cli_task(argv, env_overrides, stop_event_name):
     host = socket.gethostname()
     t0 = time.monotonic()
     if not (os.path.isfile(argv[0]) and os.access(argv[0], os.X_OK)):
-        return {"rc": 127, "host": host, "seconds": 0.0,
+        return {"rc": 127, "host": host, "seconds": 0.0, "stdout": "",
                 "stderr": f"filmgrain: error: the filmgrain CLI '{argv[0]}' is not an "
                           f"executable file on worker {host} (install it there, or give "
                           "--filmgrain-bin)\n"}
@@ -454,7 +453,7 @@ def run_cli_task(argv, env_overrides, stop_event_name):
         if proc.poll() is None:  # this thread is being torn down
             proc.terminate()
             proc.wait()
-    return {"rc": proc.returncode, "stderr": (out or "") + (err or ""), "host": host,
+    return {"rc": proc.returncode, "stdout": out or "", "stderr": err or "", "host": host,
             "seconds": time.monotonic() - t0}
 
 
@@ -592,17 +591,21 @@ class Farm:
             pass
 
 
-def _count_outcomes(results, sequence):
-    rendered = skipped = missing = 0
+def _count_outcomes(results):
+    """(rendered, up to date, missing input) from the tasks' --report-json
+    lines: each task ends one image, or says why not."""
+    counts = dict.fromkeys(REPORT_OUTCOMES, 0)
     for r in results:
-        m = SEQUENCE_SUMMARY_RE.search(r["stderr"]) if sequence else None
-        if m:
-            rendered += int(m.group(1))
-            skipped += int(m.group(2))
-            missing += int(m.group(3))
-        else:
-            rendered += 1
-    return rendered, skipped, missing
+        reports = [json.loads(line) for line in r["stdout"].splitlines()
+                   if line.startswith("{")]
+        if not reports:
+            raise FarmError(f"the task on {r['host']} ended well but its CLI reported no "
+                            f"image (stdout: {r['stdout'][-200:]!r})")
+        for report in reports:
+            if report.get("outcome") not in counts:
+                raise FarmError(f"the CLI on {r['host']} reported an unknown outcome: {report}")
+            counts[report["outcome"]] += 1
+    return tuple(counts[o] for o in REPORT_OUTCOMES)
 
 
 def render_frames(farm, a, fg_bin, jobs):
@@ -611,8 +614,7 @@ def render_frames(farm, a, fg_bin, jobs):
     sequence = jobs[0]["frame"] is not None
     tasks = [(f"frame {j['frame']}" if sequence else "image", task_argv(fg_bin, a, j))
              for j in jobs]
-    results = farm.run(tasks, "frames" if sequence else "image")
-    return _count_outcomes(results, sequence)
+    return _count_outcomes(farm.run(tasks, "frames" if sequence else "image"))
 
 
 def _strips(roi, n):

@@ -107,8 +107,9 @@ def leftovers(dirpath):
 
 def test_tasks_are_the_cli_frames(fg_bin, tmp_path):
     """A frame list in INPUT: the farm's jobs are the CLI's frames in its
-    order, and frame F's task is the user's command with --frames F and F's
-    input file (the list in INPUT would contradict --frames F)."""
+    order, and frame F's task is the user's command with --report-json,
+    --frames F and F's input file (the list in INPUT would contradict
+    --frames F)."""
     options = farm.cli_options(fg_bin)
     a = farm.parse_args([str(tmp_path / "p.3-1,7-11x2#.exr"), FAST, "-o",
                          str(tmp_path / "o.#.exr"), "--skip-missing"], options)
@@ -117,13 +118,13 @@ def test_tasks_are_the_cli_frames(fg_bin, tmp_path):
     assert jobs[0]["output"] == str(tmp_path / "o.0003.exr")
     assert farm.task_argv("fg", a, jobs[0]) == [
         "fg", str(tmp_path / "p.0003.exr"), FAST, "-o", str(tmp_path / "o.#.exr"),
-        "--skip-missing", "--frames", "3"]
+        "--skip-missing", "--report-json", "--frames", "3"]
     todo, up_to_date, missing = farm.plan(a, jobs)
     assert (todo, up_to_date, len(missing)) == ([], [], 6)  # no plates
     a = farm.parse_args(["--wedge", "--frames", "5-6", FAST, "-o", "o.#.exr"], options)
     assert farm.task_argv("fg", a, {"frame": 6, "input": "wedge"}) == [
-        "fg", "--wedge", FAST, "-o", "o.#.exr", "--frames", "6"]
-    assert farm.task_argv("fg", a, {"frame": None}) == ["fg", *a.cli]
+        "fg", "--wedge", FAST, "-o", "o.#.exr", "--report-json", "--frames", "6"]
+    assert farm.task_argv("fg", a, {"frame": None}) == ["fg", *a.cli, "--report-json"]
     assert farm.with_modifier("--filmgrain:seed=1:roi=1,2,3,4", "roi", "0,0,1,1") \
         == "--filmgrain:seed=1:roi=0,0,1,1"
 
@@ -158,6 +159,8 @@ def test_every_cli_option_is_the_cli_s(fg_bin):
     (["--list-options"], "--list-options: run the filmgrain CLI itself"),
     (["--wedge", FAST, "-o", "o.exr", "--dry-run"],
      "--dry-run: the farm runs the CLI's dry run itself"),
+    (["--wedge", FAST, "-o", "o.exr", "--report-json"],
+     "--report-json: the farm reads each task's report itself"),
     # The CLI's own messages, from its --dry-run:
     (["--wedge", FAST, "--frames", "1-3"], "no output given: -o FILE.exr is required"),
     (["--wedge", "-o", "o.exr"], "no --filmgrain command given"),

@@ -11,7 +11,7 @@ MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "edge", 
 
 OPTIONS = ["--wedge", "--chart", "--subimage", "--view", "--ch", "--colorconfig", "--iscolorspace",
            "--ocolorspace", "--filmgrain", "-d", "-o",
-           "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
+           "--frames", "--skip-existing", "--skip-missing", "--dry-run", "--report-json", "--stats", "--preview", "--threads", "--progress", "-q", "--quiet",
            "--list-stocks", "--list-options", "--print-stock", "--version", "--help"]
 
 

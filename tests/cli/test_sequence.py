@@ -241,3 +241,22 @@ def test_dry_run_lists_the_frames_and_what_is_up_to_date(run, dirs):
     assert lines[0]["settings_hash"] == Exr(outdir / "n.0001.exr").attr("filmgrain:settings_hash")
     assert lines[1]["output"] == str(outdir / "n.0002.exr")
     assert listing(outdir) == ["n.0001.exr"]  # nothing rendered
+
+
+def test_report_json_says_what_became_of_each_frame(run, dirs):
+    """--report-json: one JSON line per frame on stdout, as it ends, with -q
+    as without; frame 1 up to date, 2 rendered, 3 without input."""
+    indir, outdir = dirs
+    plates(indir, [1, 2])
+    args = [indir / "plate.####.exr", "--frames", "1-3", f"--filmgrain:{FAST}", "-o",
+            outdir / "n.####.exr", "--skip-existing", "--skip-missing", "-q"]
+    assert run(*args[:2], "1", *args[3:6]).returncode == 0  # frame 1 rendered
+    r = run(*args, "--report-json")
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    lines = [json.loads(line) for line in r.stdout.splitlines()]
+    assert [(d["frame"], d["outcome"]) for d in lines] \
+        == [(1, "up_to_date"), (2, "rendered"), (3, "missing_input")]
+    assert lines[1]["output"] == str(outdir / "n.0002.exr")
+    assert all(d["seconds"] >= 0 for d in lines)
+    r = run(*args, "--report-json", "--dry-run")
+    assert r.returncode == 1 and "give one or the other" in r.stderr
