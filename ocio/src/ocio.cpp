@@ -88,6 +88,39 @@ Status load_config(const std::string& config_path, LoadedConfig& out)
     return Status();
 }
 
+/// Loads the config (load_config) and runs body(config, info) on it. What
+/// OCIO throws becomes an error: "OCIO error <doing> in config <name>:
+/// <what>". Every entry point below that reads a config goes through it.
+template <class Body>
+Status with_config(const std::string& config_path, const std::string& doing, Body&& body)
+{
+    LoadedConfig loaded;
+    if (Status s = load_config(config_path, loaded); !s.ok())
+        return s;
+    try {
+        return body(*loaded.config, loaded.info);
+    } catch (const std::exception& e) {  // OCIO::Exception is one
+        return Status::errorf("OCIO error ", doing, " in config ", describe(loaded.info), ": ",
+                              e.what());
+    } catch (...) {
+        return Status::errorf("unknown OCIO error ", doing, " in config ",
+                              describe(loaded.info));
+    }
+}
+
+/// The config's scene_linear role, or an error: filmgrain's input is
+/// converted to it.
+Status scene_linear_of(const OCIO::Config& config, const ConfigInfo& info,
+                       OCIO::ConstColorSpaceRcPtr& out)
+{
+    out = config.getColorSpace(OCIO::ROLE_SCENE_LINEAR);
+    if (!out)
+        return Status::errorf("OCIO config ", describe(info), " has no '",
+                              OCIO::ROLE_SCENE_LINEAR,
+                              "' role: filmgrain converts its input to scene_linear");
+    return Status();
+}
+
 /// Colour spaces (all, config order) then roles; no duplicates.
 std::vector<std::string> known_names(const OCIO::Config& config)
 {
@@ -427,26 +460,15 @@ Status InputConverter::create(const std::string& config_path,
                               std::unique_ptr<InputConverter>& out)
 {
     out.reset();
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    const OCIO::Config& config = *loaded.config;
-
-    try {
-        OCIO::ConstColorSpaceRcPtr linear = config.getColorSpace(
-            OCIO::ROLE_SCENE_LINEAR);
-        if (!linear) {
-            return Status::errorf("OCIO config ", describe(loaded.info),
-                                  " has no '", OCIO::ROLE_SCENE_LINEAR,
-                                  "' role: filmgrain converts its input to "
-                                  "scene_linear");
-        }
-        OCIO::ConstColorSpaceRcPtr src;
-        if (Status s = lookup_colorspace(config, loaded.info, src_colorspace, src); !s.ok())
+    return with_config(config_path, "with colour space '" + src_colorspace + "'",
+                       [&](const OCIO::Config& config, const ConfigInfo& info) {
+        OCIO::ConstColorSpaceRcPtr linear, src;
+        if (Status s = scene_linear_of(config, info, linear); !s.ok())
             return s;
-
+        if (Status s = lookup_colorspace(config, info, src_colorspace, src); !s.ok())
+            return s;
         auto impl                     = std::make_unique<Impl>();
-        impl->info                    = loaded.info;
+        impl->info                    = info;
         impl->source_colorspace       = src_colorspace;
         impl->scene_linear_colorspace = linear->getName();
         try {
@@ -459,20 +481,12 @@ Status InputConverter::create(const std::string& config_path,
             return Status::errorf("cannot build the OCIO conversion from '",
                                   src_colorspace, "' to scene_linear ('",
                                   linear->getName(), "') in config ",
-                                  describe(loaded.info), ": ", e.what());
+                                  describe(info), ": ", e.what());
         }
         impl->noop = impl->cpu->isNoOp();
         out.reset(new InputConverter(std::move(impl)));
         return Status();
-    } catch (const std::exception& e) {
-        return Status::errorf("OCIO error with colour space '", src_colorspace,
-                              "' in config ", describe(loaded.info), ": ",
-                              e.what());
-    } catch (...) {
-        return Status::errorf("unknown OCIO error with colour space '",
-                              src_colorspace, "' in config ",
-                              describe(loaded.info));
-    }
+    });
 }
 
 void InputConverter::apply_rgb(float* rgb, size_t npixels) const
@@ -514,22 +528,18 @@ Status InputConverter::create_from_chromaticities(const std::string& config_path
     out.reset();
     if (Status s = check_tolerance(tolerance_xy); !s.ok())
         return s;
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    const OCIO::Config& config = *loaded.config;
-    try {
-        OCIO::ConstColorSpaceRcPtr linear = config.getColorSpace(OCIO::ROLE_SCENE_LINEAR);
-        if (!linear)
-            return Status::errorf("OCIO config ", describe(loaded.info), " has no '",
-                                  OCIO::ROLE_SCENE_LINEAR,
-                                  "' role: filmgrain converts its input to scene_linear");
+    return with_config(config_path,
+                       "converting chromaticities (" + describe_xy(xy) + ") to scene_linear",
+                       [&](const OCIO::Config& config, const ConfigInfo& info) {
+        OCIO::ConstColorSpaceRcPtr linear;
+        if (Status s = scene_linear_of(config, info, linear); !s.ok())
+            return s;
         ChromaticitiesRoute route;
-        if (Status s = plan_route(config, loaded.info, linear, xy, route); !s.ok())
+        if (Status s = plan_route(config, info, linear, xy, route); !s.ok())
             return s;
 
         auto impl                     = std::make_unique<Impl>();
-        impl->info                    = loaded.info;
+        impl->info                    = info;
         impl->scene_linear_colorspace = linear->getName();
         impl->via_colorspace          = route.aces->getName();
         impl->noop                    = within(route.distance_xy, tolerance_xy);
@@ -554,14 +564,7 @@ Status InputConverter::create_from_chromaticities(const std::string& config_path
         }
         out.reset(new InputConverter(std::move(impl)));
         return Status();
-    } catch (const std::exception& e) {
-        return Status::errorf("OCIO error converting chromaticities (", describe_xy(xy),
-                              ") to scene_linear in config ", describe(loaded.info), ": ",
-                              e.what());
-    } catch (...) {
-        return Status::errorf("unknown OCIO error converting chromaticities (", describe_xy(xy),
-                              ") to scene_linear in config ", describe(loaded.info));
-    }
+    });
 }
 
 // --- Converter ---------------------------------------------------------------
@@ -605,18 +608,16 @@ Status Converter::create(const std::string& config_path, const std::string& src_
                          const std::string& dst_colorspace, std::unique_ptr<Converter>& out)
 {
     out.reset();
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    const OCIO::Config& config = *loaded.config;
-    try {
+    return with_config(config_path,
+                       "converting '" + src_colorspace + "' to '" + dst_colorspace + "'",
+                       [&](const OCIO::Config& config, const ConfigInfo& info) {
         OCIO::ConstColorSpaceRcPtr cs[2];
         const std::string* names[2] = { &src_colorspace, &dst_colorspace };
         for (int i = 0; i < 2; ++i)
-            if (Status s = lookup_colorspace(config, loaded.info, *names[i], cs[i]); !s.ok())
+            if (Status s = lookup_colorspace(config, info, *names[i], cs[i]); !s.ok())
                 return s;
         auto impl         = std::make_unique<Impl>();
-        impl->info        = loaded.info;
+        impl->info        = info;
         impl->source      = cs[0]->getName();
         impl->destination = cs[1]->getName();
         try {
@@ -625,16 +626,12 @@ Status Converter::create(const std::string& config_path, const std::string& src_
         } catch (const std::exception& e) {
             return Status::errorf("cannot build the OCIO conversion from '", src_colorspace,
                                   "' to '", dst_colorspace, "' in config ",
-                                  describe(loaded.info), ": ", e.what());
+                                  describe(info), ": ", e.what());
         }
         impl->noop = impl->cpu->isNoOp();
         out.reset(new Converter(std::move(impl)));
         return Status();
-    } catch (const std::exception& e) {
-        return Status::errorf("OCIO error converting '", src_colorspace, "' to '",
-                              dst_colorspace, "' in config ", describe(loaded.info), ": ",
-                              e.what());
-    }
+    });
 }
 
 Status Converter::create_display_view(const std::string& config_path,
@@ -643,26 +640,23 @@ Status Converter::create_display_view(const std::string& config_path,
                                       std::unique_ptr<Converter>& out)
 {
     out.reset();
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    const OCIO::Config& config = *loaded.config;
-    try {
+    return with_config(config_path, "with the display transform of '" + src_colorspace + "'",
+                       [&](const OCIO::Config& config, const ConfigInfo& info) {
         OCIO::ConstColorSpaceRcPtr src;
-        if (Status s = lookup_colorspace(config, loaded.info, src_colorspace, src); !s.ok())
+        if (Status s = lookup_colorspace(config, info, src_colorspace, src); !s.ok())
             return s;
         const std::vector<std::string> displays = display_names(config);
         const std::string d = display.empty() ? std::string(config.getDefaultDisplay()) : display;
         if (std::find(displays.begin(), displays.end(), d) == displays.end())
-            return Status::errorf("unknown display '", d, "' in config ", describe(loaded.info),
+            return Status::errorf("unknown display '", d, "' in config ", describe(info),
                                   "; known: ", join(displays));
         const std::vector<std::string> views = view_names(config, d.c_str());
         const std::string v = view.empty() ? std::string(config.getDefaultView(d.c_str())) : view;
         if (std::find(views.begin(), views.end(), v) == views.end())
             return Status::errorf("unknown view '", v, "' of display '", d, "' in config ",
-                                  describe(loaded.info), "; known: ", join(views));
+                                  describe(info), "; known: ", join(views));
         auto impl         = std::make_unique<Impl>();
-        impl->info        = loaded.info;
+        impl->info        = info;
         impl->source      = src->getName();
         impl->destination = d + " / " + v;
         try {
@@ -672,15 +666,12 @@ Status Converter::create_display_view(const std::string& config_path,
         } catch (const std::exception& e) {
             return Status::errorf("cannot build the OCIO display transform from '",
                                   src_colorspace, "' to display '", d, "', view '", v,
-                                  "' in config ", describe(loaded.info), ": ", e.what());
+                                  "' in config ", describe(info), ": ", e.what());
         }
         impl->noop = impl->cpu->isNoOp();
         out.reset(new Converter(std::move(impl)));
         return Status();
-    } catch (const std::exception& e) {
-        return Status::errorf("OCIO error with the display transform of '", src_colorspace,
-                              "' in config ", describe(loaded.info), ": ", e.what());
-    }
+    });
 }
 
 void Converter::apply_rgb(float* rgb, size_t npixels) const
@@ -709,20 +700,15 @@ Status find_colorspace(const std::string& config_path, const std::string& name,
                        std::string& resolved, ConfigInfo* info)
 {
     resolved.clear();
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    if (info)
-        *info = loaded.info;
-    try {
+    return with_config(config_path, "looking up colour space '" + name + "'",
+                       [&](const OCIO::Config& config, const ConfigInfo& loaded) {
+        if (info)
+            *info = loaded;
         if (OCIO::ConstColorSpaceRcPtr cs
-            = name.empty() ? nullptr : loaded.config->getColorSpace(name.c_str()))
+            = name.empty() ? nullptr : config.getColorSpace(name.c_str()))
             resolved = cs->getName();
-    } catch (const std::exception& e) {
-        return Status::errorf("OCIO error looking up colour space '", name, "' in config ",
-                              describe(loaded.info), ": ", e.what());
-    }
-    return Status();
+        return Status();
+    });
 }
 
 Status compare_chromaticities(const std::string& config_path, const std::string& colorspace,
@@ -731,24 +717,19 @@ Status compare_chromaticities(const std::string& config_path, const std::string&
     same = false;
     if (Status s = check_tolerance(tolerance_xy); !s.ok())
         return s;
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    const OCIO::Config& config = *loaded.config;
-    try {
+    return with_config(config_path,
+                       "comparing chromaticities (" + describe_xy(xy) + ") with colour space '"
+                           + colorspace + "'",
+                       [&](const OCIO::Config& config, const ConfigInfo& info) {
         OCIO::ConstColorSpaceRcPtr cs;
-        if (Status s = lookup_colorspace(config, loaded.info, colorspace, cs); !s.ok())
+        if (Status s = lookup_colorspace(config, info, colorspace, cs); !s.ok())
             return s;
         ChromaticitiesRoute route;
-        if (Status s = plan_route(config, loaded.info, cs, xy, route); !s.ok())
+        if (Status s = plan_route(config, info, cs, xy, route); !s.ok())
             return s;
         same = within(route.distance_xy, tolerance_xy);
         return Status();
-    } catch (const std::exception& e) {
-        return Status::errorf("OCIO error comparing chromaticities (", describe_xy(xy),
-                              ") with colour space '", colorspace, "' in config ",
-                              describe(loaded.info), ": ", e.what());
-    }
+    });
 }
 
 const std::string& embedded_config_text()
@@ -761,17 +742,11 @@ Status list_colorspaces(const std::string& config_path,
                         std::vector<std::string>& names)
 {
     names.clear();
-    LoadedConfig loaded;
-    if (Status s = load_config(config_path, loaded); !s.ok())
-        return s;
-    try {
-        names = known_names(*loaded.config);
-    } catch (const std::exception& e) {
-        names.clear();
-        return Status::errorf("cannot list the colour spaces of OCIO config ",
-                              describe(loaded.info), ": ", e.what());
-    }
-    return Status();
+    return with_config(config_path, "listing the colour spaces",
+                       [&](const OCIO::Config& config, const ConfigInfo&) {
+        names = known_names(config);
+        return Status();
+    });
 }
 
 }  // namespace filmgrain::ocio
