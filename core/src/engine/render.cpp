@@ -13,6 +13,7 @@
 #include <functional>
 
 #include "engine/engine_plan.h"
+#include "engine/settings.h"
 #include "model/exposure.h"
 #include "model/geometry.h"
 #include "model/image_formation.h"
@@ -122,10 +123,7 @@ Status required_input_window(const Stock& stock, const SceneSettings& scene,
         if (Status s = scene.validate(); !s)
             return s;
         FrameGeometry frame;
-        if (Status s = FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
-                                           settings.scan_width, settings.scan_height, frame,
-                                           settings.scan_reference);
-            !s)
+        if (Status s = frame_geometry(scene, input_width, input_height, settings, frame); !s)
             return s;
         const Roi roi = settings.roi.empty() ? Roi { 0, 0, frame.scan_width, frame.scan_height }
                                              : settings.roi;
@@ -147,9 +145,8 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         if (Status s = validate_request(stock, scene, input, settings, density); !s)
             return s;
         FrameGeometry frame;
-        if (Status s = FrameGeometry::make(scene.frame_width_mm, input.frame_width(),
-                                           input.frame_height(), settings.scan_width,
-                                           settings.scan_height, frame, settings.scan_reference);
+        if (Status s = frame_geometry(scene, input.frame_width(), input.frame_height(),
+                                      settings, frame);
             !s)
             return s;
         Roi roi = settings.roi;

@@ -1,7 +1,7 @@
 // The render's settings: their validation, the names of engines and methods
 // (for --stats, the CLI and Python), the seeds, and the scan geometry they
 // ask for.
-#include "filmgrain/render.h"
+#include "engine/settings.h"
 
 #include <cmath>
 #include <string>
@@ -172,14 +172,19 @@ Status RenderSettings::validate() const
     return {};
 }
 
+Status frame_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
+                      const RenderSettings& settings, FrameGeometry& out)
+{
+    return FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
+                               settings.scan_width, settings.scan_height, out,
+                               settings.scan_reference);
+}
+
 Status scan_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
                      const RenderSettings& settings, ScanGeometry& out)
 {
     FrameGeometry g;
-    if (Status s = FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
-                                       settings.scan_width, settings.scan_height, g,
-                                       settings.scan_reference);
-        !s)
+    if (Status s = frame_geometry(scene, input_width, input_height, settings, g); !s)
         return s;
     out.width           = g.scan_width;
     out.height          = g.scan_height;
