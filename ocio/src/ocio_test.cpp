@@ -749,6 +749,24 @@ void expect_converts(const InputConverter& conv, const std::vector<Imath::V3d>& 
                 << what << ": colour " << i << " channel " << c;
 }
 
+/// The converter of a file whose primaries are `xy`, checked on the Rec.709
+/// test colours written into such a file by `to_file` (Rec.709 RGB -> the
+/// file's): it converts them back within 1e-5, and is not a no-op.
+std::unique_ptr<InputConverter> expect_xy_gives_rec709(const Chromaticities& xy,
+                                                       const Imath::M33d& to_file,
+                                                       const std::string& what)
+{
+    std::vector<Imath::V3d> file;
+    for (const Imath::V3d& c : k_rec709_colours)
+        file.push_back(mul(to_file, c));
+    auto conv = make_xy("", xy);
+    if (!conv)
+        return conv;  // make_xy failed the test
+    EXPECT_FALSE(conv->is_noop()) << what;
+    expect_converts(*conv, file, k_rec709_colours, 1e-5, what);
+    return conv;
+}
+
 }  // namespace
 
 TEST_F(OcioTest, Rec709ChromaticitiesAreTheEmbeddedSceneLinear)
@@ -790,13 +808,7 @@ TEST_F(OcioTest, XyzChromaticitiesGiveRec709)
     // Bradford D65 -> E. Converting back must give the Rec.709 value.
     const Imath::M33d to_file
         = bradford(white_of(k_rec709_to_xyz), Imath::V3d(1.0, 1.0, 1.0)) * k_rec709_to_xyz;
-    std::vector<Imath::V3d> file;
-    for (const Imath::V3d& c : k_rec709_colours)
-        file.push_back(mul(to_file, c));
-    auto conv = make_xy("", k_xyz_xy);
-    ASSERT_TRUE(conv);
-    EXPECT_FALSE(conv->is_noop());
-    expect_converts(*conv, file, k_rec709_colours, 1e-5, "XYZ (E)");
+    EXPECT_TRUE(expect_xy_gives_rec709(k_xyz_xy, to_file, "XYZ (E)"));
 }
 
 TEST_F(OcioTest, Ap0ChromaticitiesGiveRec709)
@@ -806,13 +818,8 @@ TEST_F(OcioTest, Ap0ChromaticitiesGiveRec709)
     const Imath::M33d to_file = k_ap0_to_xyz.inverse()
                                 * bradford(white_of(k_rec709_to_xyz), white_of(k_ap0_to_xyz))
                                 * k_rec709_to_xyz;
-    std::vector<Imath::V3d> file;
-    for (const Imath::V3d& c : k_rec709_colours)
-        file.push_back(mul(to_file, c));
-    auto conv = make_xy("", k_ap0_xy);
+    const auto conv = expect_xy_gives_rec709(k_ap0_xy, to_file, "AP0");
     ASSERT_TRUE(conv);
-    EXPECT_FALSE(conv->is_noop());
-    expect_converts(*conv, file, k_rec709_colours, 1e-5, "AP0");
     // AP0 red is colour-science's ACES2065-1 -> sRGB first column (as in
     // Aces2065ToRec709 above).
     expect_converts(*conv, { { 1.0, 0.0, 0.0 } },

@@ -30,6 +30,19 @@ OIIO::ImageBuf density_image(int w, int h, const float* values)
     return buf;
 }
 
+/// The operator's densities of `src` with `opts`, and their regrain: an
+/// error of either.
+Status render_regrain(const OIIO::ImageBuf& src, const FilmgrainOptions& opts,
+                      OIIO::ImageBuf& density, OIIO::ImageBuf& out)
+{
+    if (!IBA::filmgrain(density, src, opts))
+        return Status::errorf("the operator failed: ", density.geterror());
+    OutputRequest req;
+    req.kind = OutputKind::regrain;
+    OutputReport report;
+    return apply_output(req, opts, src, density, out, report);
+}
+
 TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
 {
     // The default stock, vision3-500t: layers R, G, B with 5219's Annex C
@@ -231,14 +244,8 @@ TEST(OutputTransform, RegrainOfUniformPatchesKeepsTheMeanAndCarriesTheGrain)
     for (OIIO::ImageBuf::Iterator<float> it(src); !it.done(); ++it)
         for (int c = 0; c < 3; ++c)
             it[c] = static_cast<float>(0.18 * std::exp2(p.stops[static_cast<size_t>(it.x() / p.side)]));
-    OIIO::ImageBuf density;
-    ASSERT_TRUE(IBA::filmgrain(density, src, opts)) << density.geterror();
-
-    OutputRequest req;
-    req.kind = OutputKind::regrain;
-    OIIO::ImageBuf out;
-    OutputReport report;
-    const Status s = apply_output(req, opts, src, density, out, report);
+    OIIO::ImageBuf density, out;
+    const Status s = render_regrain(src, opts, density, out);
     ASSERT_TRUE(s) << s.message();
     EXPECT_EQ(out.spec().get_string_attribute("filmgrain:output"), "regrain");
     EXPECT_EQ(out.spec().get_string_attribute("filmgrain:colorspace"), "lin_rec709");
@@ -333,13 +340,8 @@ TEST(OutputTransform, RegrainRefusesAnotherScanSizeAndTooManyLayers)
     OIIO::ImageBuf src(OIIO::ImageSpec(8, 8, 3, OIIO::TypeFloat));
     OIIO::ImageBufAlgo::fill(src, { 0.18f, 0.18f, 0.18f });
     opts.scan_width = 4;
-    OIIO::ImageBuf density;
-    ASSERT_TRUE(IBA::filmgrain(density, src, opts)) << density.geterror();
-    OutputRequest req;
-    req.kind = OutputKind::regrain;
-    OIIO::ImageBuf out;
-    OutputReport report;
-    const Status s = apply_output(req, opts, src, density, out, report);
+    OIIO::ImageBuf density, out;
+    const Status s = render_regrain(src, opts, density, out);
     ASSERT_FALSE(s);
     EXPECT_NE(s.message().find("needs the scan at the input's size (8x8): the scan is 4x4"),
               std::string::npos)

@@ -18,19 +18,9 @@ const Curve& paper_curve()
 {
     static const Curve curve = [] {
         const Stock stock = testing::load_test_stock("paper");
-        StripSpec spec;
-        spec.log10_h_min         = -3.6;
-        spec.log10_h_max         = -0.9;
-        spec.log10_h_step        = 0.1;
-        spec.budget.max_area_um2 = 1.0e6;
+        StripSpec spec           = testing::test_strip(-3.6, -0.9, 0.2, 2.0e6, 61);
         spec.budget.min_area_um2 = 1.0e5;
-        spec.budget.max_cost_s   = 0.2;
-        spec.fog_area_um2        = 2.0e6;
-        spec.seed                = 61;
-        Curve c;
-        const Status s = expose_strip(stock, spec, testing::exact_settings(), c);
-        EXPECT_TRUE(s) << s.message();
-        return c;
+        return testing::measure_strip(stock, spec);
     }();
     return curve;
 }

@@ -20,17 +20,8 @@ Developed develop(double time_s, uint64_t seed)
 {
     Stock stock              = testing::load_test_stock("paper");
     stock.development_time_s = time_s;
-    StripSpec spec;
-    spec.log10_h_min         = -3.0;
-    spec.log10_h_max         = -1.4;
-    spec.log10_h_step        = 0.1;
-    spec.budget.max_area_um2 = 1.0e6;
-    spec.budget.max_cost_s   = 0.15;
-    spec.fog_area_um2        = 4.0e6;
-    spec.seed                = seed;
-    Curve c;
-    const Status s = expose_strip(stock, spec, testing::exact_settings(), c);
-    EXPECT_TRUE(s) << s.message();
+    const Curve c
+        = testing::measure_strip(stock, testing::test_strip(-3.0, -1.4, 0.15, 4.0e6, seed));
     return { analyse_curve(c.layers[0]), c.layers[0].fog_density_se };
 }
 

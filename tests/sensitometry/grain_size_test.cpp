@@ -22,17 +22,8 @@ SpeedPoint speed_point(double d_um, uint64_t seed)
 {
     Stock stock = testing::load_test_stock("paper");
     stock.layers[0].populations[0].diameter_um = d_um;
-    StripSpec spec;
-    spec.log10_h_min         = -3.8;
-    spec.log10_h_max         = -1.8;
-    spec.log10_h_step        = 0.1;
-    spec.budget.max_area_um2 = 1.0e6;
-    spec.budget.max_cost_s   = 0.1;
-    spec.fog_area_um2        = 2.0e6;
-    spec.seed                = seed;
-    Curve c;
-    const Status s = expose_strip(stock, spec, testing::exact_settings(), c);
-    EXPECT_TRUE(s) << s.message();
+    const Curve c
+        = testing::measure_strip(stock, testing::test_strip(-3.8, -1.8, 0.1, 2.0e6, seed));
     const LayerCurve& l = c.layers[0];
     SpeedPoint sp;
     sp.log10_h = first_crossing(l.log10_h, l.density, l.fog_density + 0.1);

@@ -40,7 +40,8 @@ Found measure(const std::string& name, uint64_t seed)
     budget.max_cost_s   = 0.4;
     Found f;
     double guess = -1.9;  // D = 1 above fog at 1e-2 s for both presets
-    for (int e = -2; e >= -6; --e) {
+    // Shutter 10^e s, searched from the neighbour's exposure.
+    auto find_at = [&](int e) {
         ReciprocityPoint p;
         const Status s = exposure_for_net_density(stock, std::pow(10.0, e), 1.0, fog,
                                                   0.1 * std::round(guess * 10), budget,
@@ -48,17 +49,12 @@ Found measure(const std::string& name, uint64_t seed)
         EXPECT_TRUE(s) << s.message();
         f.points[std::pow(10.0, e)] = p;
         guess = p.log10_h;
-    }
+    };
+    for (int e = -2; e >= -6; --e)
+        find_at(e);
     guess = f.points[1e-2].log10_h;
-    for (int e = -1; e <= 2; ++e) {
-        ReciprocityPoint p;
-        const Status s = exposure_for_net_density(stock, std::pow(10.0, e), 1.0, fog,
-                                                  0.1 * std::round(guess * 10), budget,
-                                                  testing::exact_settings(), seed + 10 + e, p);
-        EXPECT_TRUE(s) << s.message();
-        f.points[std::pow(10.0, e)] = p;
-        guess = p.log10_h;
-    }
+    for (int e = -1; e <= 2; ++e)
+        find_at(e);
     return f;
 }
 

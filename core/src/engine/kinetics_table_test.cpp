@@ -17,16 +17,25 @@
 namespace filmgrain {
 namespace {
 
+/// A table of N <= max_photons to a standard error of
+/// target_standard_error, from stream stream_key.
+DevelopTable::Options table_options(uint64_t max_photons, double target_standard_error,
+                                    uint64_t stream_key = 0)
+{
+    DevelopTable::Options o;
+    o.max_photons           = max_photons;
+    o.target_standard_error = target_standard_error;
+    o.stream_key            = stream_key;
+    return o;
+}
+
 TEST(DevelopTable, AgreesWithIndependentRunsOfTheChain)
 {
     Stock stock;
     const Development dev(stock);
     const KineticsRates rates { 1e7, 1e6, 10 };
     for (double shutter : { 1e-6, 1.0 / 48, 100.0 }) {
-        DevelopTable::Options o;
-        o.max_photons           = 300;
-        o.target_standard_error = 2e-3;
-        o.stream_key            = 1;
+        const DevelopTable::Options o = table_options(300, 2e-3, 1);
         const DevelopTable table(rates, shutter, dev, o);
         // The target, plus the bias of runs stopped once decided (at most
         // a thousandth of the target, added to every node's error).
@@ -63,10 +72,7 @@ TEST(DevelopTable, BytesGiveTheSameTableOrNone)
 {
     Stock stock;
     const Development dev(stock);
-    DevelopTable::Options o;
-    o.max_photons           = 150;
-    o.target_standard_error = 5e-3;
-    o.stream_key            = 11;
+    const DevelopTable::Options o = table_options(150, 5e-3, 11);
     const DevelopTable table({ 1e7, 1e6, 10 }, 0.02, dev, o);
     const std::string bytes = table.serialize();
     const auto back         = DevelopTable::deserialize(bytes, o);
@@ -97,10 +103,8 @@ TEST(DevelopTable, KeptOnDiskForOtherProcesses)
     fs::remove_all(dir);
     Stock stock;
     const Development dev(stock);
-    DevelopTable::Options o;
-    o.max_photons           = 120;
-    o.target_standard_error = 8e-3;
-    o.stream_key            = 0x5eed0000 + static_cast<uint64_t>(::getpid());  // not in memory
+    DevelopTable::Options o  // a stream no table in memory has
+        = table_options(120, 8e-3, 0x5eed0000 + static_cast<uint64_t>(::getpid()));
     {
         ScopedEnv env("FILMGRAIN_CACHE_DIR", dir.string());
         if (table_cache_dir().empty())
@@ -140,10 +144,8 @@ TEST(DevelopTable, DeterministicForAnyThreadCount)
 {
     Stock stock;
     const Development dev(stock);
-    DevelopTable::Options o;
-    o.max_photons           = 200;
-    o.target_standard_error = 5e-3;
-    o.nthreads              = 1;
+    DevelopTable::Options o = table_options(200, 5e-3);
+    o.nthreads = 1;
     const DevelopTable a({ 1e7, 1e6, 10 }, 0.02, dev, o);
     o.nthreads = 3;
     const DevelopTable b({ 1e7, 1e6, 10 }, 0.02, dev, o);
@@ -158,9 +160,7 @@ TEST(DevelopTable, StepBudgetStopsExactlyWhenTheFullCostExceedsIt)
     Stock stock;
     const Development dev(stock);
     const KineticsRates rates { 1e7, 1e6, 10 };
-    DevelopTable::Options o;
-    o.max_photons           = 200;
-    o.target_standard_error = 5e-3;
+    DevelopTable::Options o = table_options(200, 5e-3);
     const DevelopTable full(rates, 0.02, dev, o);
     ASSERT_TRUE(full.complete());
     const uint64_t cost = full.total_steps();

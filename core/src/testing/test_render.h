@@ -41,36 +41,55 @@ inline bool bit_identical(const std::vector<float>& a, const std::vector<float>&
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
-/// The determinism guarantee for `engine`: 1 thread with 64-pixel tiles and
-/// 2 threads with 7-pixel tiles give the same bits, and a render of `roi`
-/// (2 threads, 7-pixel tiles) is a crop of the full one. The scan is the
-/// input's size. `scale`: the scale setting (unset: the engine's choice).
-inline void expect_deterministic(const TestScene& s, Engine engine, const Roi& roi,
-                                 std::optional<ScaleMethod> scale = {})
+/// The determinism guarantee for `base` (its engine, scale, scan and ROI;
+/// an empty ROI: the whole scan): 1 thread with 64-pixel tiles and 2
+/// threads with `tile_px`-pixel tiles give the same bits, and a render of
+/// `roi` (2 threads, the same tiles) is a crop of the whole. Returns the
+/// whole render.
+inline std::vector<float> expect_deterministic(const TestScene& s, const RenderSettings& base,
+                                               const Roi& roi, int tile_px = 7)
 {
-    RenderSettings one;
-    one.engine       = engine;
-    one.scale        = scale;
-    one.nthreads     = 1;
-    one.tile_size_px = 64;
+    RenderSettings one = base;
+    one.nthreads       = 1;
+    one.tile_size_px   = 64;
     RenderSettings two = one;
     two.nthreads       = 2;
-    two.tile_size_px   = 7;
-    const auto a = render_scene(s, one);
-    EXPECT_TRUE(bit_identical(a, render_scene(s, two))) << engine_name(engine);
+    two.tile_size_px   = tile_px;
+    const std::vector<float> a = render_scene(s, one);
+    EXPECT_TRUE(bit_identical(a, render_scene(s, two))) << engine_name(base.engine);
+    ScanGeometry scan;
+    EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, base, scan));
+    const Roi whole = base.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : base.roi;
     RenderSettings part = two;
     part.roi            = roi;
     const auto crop     = render_scene(s, part);
     const size_t nl     = s.stock.layers.size();
     for (int64_t y = roi.y_begin; y < roi.y_end; ++y)
         for (int64_t x = roi.x_begin; x < roi.x_end; ++x)
-            for (size_t l = 0; l < nl; ++l)
-                ASSERT_EQ(a[static_cast<size_t>(y * s.view.width + x) * nl + l],
-                          crop[static_cast<size_t>((y - roi.y_begin) * roi.width()
-                                                   + (x - roi.x_begin))
-                                   * nl
-                               + l])
-                    << engine_name(engine) << " " << x << "," << y << " layer " << l;
+            for (size_t l = 0; l < nl; ++l) {
+                const auto at_whole
+                    = static_cast<size_t>((y - whole.y_begin) * whole.width() + x - whole.x_begin);
+                const auto at_crop
+                    = static_cast<size_t>((y - roi.y_begin) * roi.width() + x - roi.x_begin);
+                if (a[at_whole * nl + l] != crop[at_crop * nl + l]) {
+                    ADD_FAILURE() << engine_name(base.engine) << " " << x << "," << y
+                                  << " layer " << l << ": " << a[at_whole * nl + l]
+                                  << " in the whole, " << crop[at_crop * nl + l] << " in the crop";
+                    return a;
+                }
+            }
+    return a;
+}
+
+/// The same for `engine` (and `scale`; unset: the engine's choice) over
+/// the whole scan, the input's size.
+inline void expect_deterministic(const TestScene& s, Engine engine, const Roi& roi,
+                                 std::optional<ScaleMethod> scale = {})
+{
+    RenderSettings base;
+    base.engine = engine;
+    base.scale  = scale;
+    expect_deterministic(s, base, roi);
 }
 
 /// The mean of independent units (e.g. block means) and its standard error
