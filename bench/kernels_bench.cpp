@@ -320,55 +320,61 @@ struct CoverageFixture {
     }
 };
 
-void BM_GridCoverage(benchmark::State& state)
+/// The loop of the coverage benchmarks: cover(fx, fraction) covers one
+/// block of the fixture whose covered fraction is state.range(0) / 100;
+/// items are discs.
+template <class Cover>
+void time_coverage(benchmark::State& state, Cover&& cover)
 {
     const CoverageFixture fx(static_cast<double>(state.range(0)) / 100.0);
-    GridCoverageScratch scratch;
     std::vector<double> fraction(CoverageFixture::kBlock * CoverageFixture::kBlock);
     for (auto _ : state) {
-        grid_coverage(fx.discs, 0, 0, CoverageFixture::kBlock, CoverageFixture::kBlock,
-                      CoverageFixture::kPitchUm, CoverageFixture::kPitchUm, scratch,
-                      fraction.data());
+        cover(fx, fraction.data());
         benchmark::DoNotOptimize(fraction.data());
     }
     state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * fx.discs.size()));
     state.counters["discs"] = static_cast<double>(fx.discs.size());
 }
+
+constexpr int64_t kBlock   = CoverageFixture::kBlock;
+constexpr double kPitchUm = CoverageFixture::kPitchUm;
+
+void BM_GridCoverage(benchmark::State& state)
+{
+    GridCoverageScratch scratch;
+    time_coverage(state, [&](const CoverageFixture& fx, double* fraction) {
+        grid_coverage(fx.discs, 0, 0, kBlock, kBlock, kPitchUm, kPitchUm, scratch, fraction);
+    });
+}
 // Covered fraction 0.1, 0.5, 0.8, 0.95 (density 0.05, 0.3, 0.7, 1.3).
 BENCHMARK(BM_GridCoverage)->Arg(10)->Arg(50)->Arg(80)->Arg(95);
 
+/// Scanline and raster coverage (the same arguments): state.range(1)
+/// samples per pixel.
+template <class Scratch>
+using SampledCoverage = void (*)(const std::vector<Disc>&, int64_t, int64_t, int64_t, int64_t,
+                                 double, double, int, Scratch&, double*);
+
+template <class Scratch>
+void time_sampled_coverage(benchmark::State& state, SampledCoverage<Scratch> cover)
+{
+    const int samples = static_cast<int>(state.range(1));
+    Scratch scratch;
+    time_coverage(state, [&](const CoverageFixture& fx, double* fraction) {
+        cover(fx.discs, 0, 0, kBlock, kBlock, kPitchUm, kPitchUm, samples, scratch, fraction);
+    });
+}
+
 void BM_ScanlineCoverage(benchmark::State& state)
 {
-    const CoverageFixture fx(static_cast<double>(state.range(0)) / 100.0);
-    const int samples = static_cast<int>(state.range(1));
-    ScanlineScratch scratch;
-    std::vector<double> fraction(CoverageFixture::kBlock * CoverageFixture::kBlock);
-    for (auto _ : state) {
-        scanline_coverage(fx.discs, 0, 0, CoverageFixture::kBlock, CoverageFixture::kBlock,
-                          CoverageFixture::kPitchUm, CoverageFixture::kPitchUm, samples, scratch,
-                          fraction.data());
-        benchmark::DoNotOptimize(fraction.data());
-    }
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * fx.discs.size()));
-    state.counters["discs"] = static_cast<double>(fx.discs.size());
+    time_sampled_coverage<ScanlineScratch>(state, scanline_coverage);
 }
 BENCHMARK(BM_ScanlineCoverage)
     ->ArgsProduct({ { 10, 50, 80, 95 }, { 1, 4, 16 } });
 
 void BM_RasterCoverage(benchmark::State& state)
 {
-    const CoverageFixture fx(static_cast<double>(state.range(0)) / 100.0);
-    const int samples = static_cast<int>(state.range(1));
-    RasterScratch scratch;
-    std::vector<double> fraction(CoverageFixture::kBlock * CoverageFixture::kBlock);
-    for (auto _ : state) {
-        raster_coverage(fx.discs, 0, 0, CoverageFixture::kBlock, CoverageFixture::kBlock,
-                        CoverageFixture::kPitchUm, CoverageFixture::kPitchUm, samples, scratch,
-                        fraction.data());
-        benchmark::DoNotOptimize(fraction.data());
-    }
-    state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * fx.discs.size()));
-    state.counters["discs"] = static_cast<double>(fx.discs.size());
+    time_sampled_coverage<RasterScratch>(state, raster_coverage);
 }
 // 8 rows: fast's 4 per radius of the 6 um discs on 6.25 um pixels; 42: auto's
 // 21 per radius at the default tolerance.

@@ -330,6 +330,28 @@ private:
         return {};
     }
 
+    /// One strip of a sweep (3, 4): `stock` from 10^log10_h_min to
+    /// 10^log10_h_max lx s in 0.1 steps within the sweeps' budget, seeded
+    /// by `stream`; its first layer's points are written to `curves` after
+    /// the swept value `parameter`.
+    Status sweep_strip(const Stock& stock, double log10_h_min, double log10_h_max,
+                       uint64_t stream, double parameter, Csv& curves, fs::Curve& out)
+    {
+        fs::StripSpec spec;
+        spec.log10_h_min  = log10_h_min;
+        spec.log10_h_max  = log10_h_max;
+        spec.log10_h_step = 0.1;
+        spec.budget.max_area_um2 = 1.0e6;
+        spec.budget.max_cost_s   = 0.25;
+        spec.seed = fs::patch_seed(m_opt.seed, stream);
+        if (Status s = fs::expose_strip(stock, spec, m_settings, out); !s)
+            return s;
+        const fs::LayerCurve& l = out.layers[0];
+        for (size_t i = 0; i < l.log10_h.size(); ++i)
+            curves.row(out.engine, parameter, l.log10_h[i], l.density[i], l.density_se[i]);
+        return {};
+    }
+
     // 3. Grain size and speed.
     Status grain_size()
     {
@@ -344,19 +366,12 @@ private:
         for (double d : { 4.0, 6.0, 9.0 }) {
             Stock stock = base;
             stock.layers[0].populations[0].diameter_um = d;
-            fs::StripSpec spec;
-            spec.log10_h_min  = -4.5;
-            spec.log10_h_max  = -0.5;
-            spec.log10_h_step = 0.1;
-            spec.budget.max_area_um2 = 1.0e6;
-            spec.budget.max_cost_s   = 0.25;
-            spec.seed = fs::patch_seed(m_opt.seed, 2000 + static_cast<uint64_t>(d * 10));
             fs::Curve c;
-            if (Status s = fs::expose_strip(stock, spec, m_settings, c); !s)
+            if (Status s = sweep_strip(stock, -4.5, -0.5, 2000 + static_cast<uint64_t>(d * 10),
+                                       d, curves, c);
+                !s)
                 return s;
             const fs::LayerCurve& l = c.layers[0];
-            for (size_t i = 0; i < l.log10_h.size(); ++i)
-                curves.row(c.engine, d, l.log10_h[i], l.density[i], l.density_se[i]);
             const fs::CurveMetrics m = fs::analyse_curve(l);
             table.row(c.engine, d, m.base_fog_density, m.speed_log10_h, m.iso_speed, m.gamma,
                       m.d_max);
@@ -382,19 +397,12 @@ private:
         for (double t : { 60.0, 120.0, 240.0, 480.0, 960.0 }) {
             Stock stock = base;
             stock.development_time_s = t;
-            fs::StripSpec spec;
-            spec.log10_h_min  = -3.8;
-            spec.log10_h_max  = -0.8;
-            spec.log10_h_step = 0.1;
-            spec.budget.max_area_um2 = 1.0e6;
-            spec.budget.max_cost_s   = 0.25;
-            spec.seed = fs::patch_seed(m_opt.seed, 3000 + static_cast<uint64_t>(t));
             fs::Curve c;
-            if (Status s = fs::expose_strip(stock, spec, m_settings, c); !s)
+            if (Status s = sweep_strip(stock, -3.8, -0.8, 3000 + static_cast<uint64_t>(t), t,
+                                       curves, c);
+                !s)
                 return s;
             const fs::LayerCurve& l = c.layers[0];
-            for (size_t i = 0; i < l.log10_h.size(); ++i)
-                curves.row(c.engine, t, l.log10_h[i], l.density[i], l.density_se[i]);
             const fs::CurveMetrics m = fs::analyse_curve(l);
             // MODEL.md 4: unexposed grains develop with f = 1 - exp(-t / fog_tau),
             // so the fog density is 0.434 n E[a] f (Boolean model: -log10 of
