@@ -1,6 +1,7 @@
 """Helpers shared by every pytest suite of filmgrain (tests/cli, python/tests,
 python/tests/test_farm.py): the built CLI, its environment, images written
-and read back with OpenImageIO, JSON, and child processes stopped.
+and read back with OpenImageIO, JSON, and child processes watched and
+stopped.
 
 Each suite's conftest.py (test_farm.py itself: it runs with --noconftest)
 puts this folder on sys.path and imports what it uses from here.
@@ -9,6 +10,8 @@ puts this folder on sys.path and imports what it uses from here.
 import contextlib
 import json
 import os
+import select
+import time
 
 import numpy as np
 import OpenImageIO as oiio
@@ -105,3 +108,24 @@ def reaped(proc):
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def read_stderr_until(proc, marker, timeout):
+    """Reads the child process `proc`'s stderr (a pipe of bytes) until
+    `marker` appears in it; returns all read so far. Fails the test if it
+    has not appeared within `timeout` seconds or stderr closes first."""
+    seen = b""
+    deadline = time.monotonic() + timeout
+    fd = proc.stderr.fileno()
+    while time.monotonic() < deadline:
+        # A raw read of what is there (no buffered readline that could
+        # block past the deadline).
+        ready, _, _ = select.select([fd], [], [], 0.2)
+        if ready:
+            chunk = os.read(fd, 4096)
+            if not chunk:
+                break
+            seen += chunk
+            if marker in seen:
+                return seen
+    pytest.fail(f"{marker!r} not seen within {timeout} s: {seen!r}")

@@ -1,8 +1,6 @@
 """An interrupted run (SIGINT, SIGTERM) cancels the render, removes its
 temporary files, writes no output and exits with 128 + the signal number."""
 
-import os
-import select
 import signal
 import subprocess
 import time
@@ -10,7 +8,7 @@ import time
 import pytest
 
 from conftest import clean_env, listing
-from fgtest import reaped
+from fgtest import read_stderr_until, reaped
 
 # The wedge of color-negative (paper-scale grains) over a 6 mm frame on one
 # thread takes several seconds (tens on a slow machine): long enough to be
@@ -18,23 +16,6 @@ from fgtest import reaped
 # checked between tiles).
 SLOW = ["--wedge", "--filmgrain:stock=color-negative:width_mm=6:tile=16", "--threads", "1",
         "--progress"]
-
-
-def wait_for_progress(proc, timeout=60):
-    """Reads stderr until the first progress report: the render is running."""
-    seen = b""
-    deadline = time.monotonic() + timeout
-    fd = proc.stderr.fileno()
-    while time.monotonic() < deadline:
-        ready, _, _ = select.select([fd], [], [], 0.5)
-        if ready:
-            chunk = os.read(fd, 4096)
-            if not chunk:
-                break
-            seen += chunk
-            if b"simulating" in seen:
-                return seen
-    pytest.fail(f"no progress report within {timeout} s: {seen!r}")
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
@@ -45,7 +26,8 @@ def test_interrupt_leaves_nothing(fg_bin, tmp_path, sig):
             out / "w.png"]
     with reaped(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                  env=clean_env())) as proc:
-        seen = wait_for_progress(proc)
+        # The first progress report: the render is running.
+        seen = read_stderr_until(proc, b"simulating", timeout=60)
         # While it renders, no file exists yet: outputs are created only
         # when written (unnamed until complete), so even SIGKILL leaves none.
         assert listing(out) == []

@@ -3,16 +3,14 @@
 
 import json
 import os
-import select
 import signal
 import subprocess
-import time
 
 import numpy as np
 import pytest
 
 from conftest import FAST, Exr, clean_env, listing, read_json, rgb_ramp, write_image
-from fgtest import reaped
+from fgtest import read_stderr_until, reaped
 
 MASK = (1 << 64) - 1
 
@@ -176,22 +174,6 @@ def test_skip_existing_rerenders_only_what_changed(run, dirs):
     assert r.returncode == 0 and "3 rendered" in r.stderr, r.stderr
 
 
-def read_until(proc, marker, timeout=120):
-    seen = b""
-    deadline = time.monotonic() + timeout
-    fd = proc.stderr.fileno()
-    while time.monotonic() < deadline:
-        ready, _, _ = select.select([fd], [], [], 0.2)
-        if ready:
-            chunk = os.read(fd, 4096)
-            if not chunk:
-                break
-            seen += chunk
-            if marker in seen:
-                return seen
-    pytest.fail(f"{marker!r} not seen within {timeout} s: {seen!r}")
-
-
 def test_sigkill_mid_frame_leaves_no_partial_file_and_resumes(fg_bin, dirs):
     """Farm pre-emption: SIGKILL while frame 2 renders. Frame 1 is complete,
     nothing else exists (no temporary file either), and --skip-existing
@@ -202,7 +184,7 @@ def test_sigkill_mid_frame_leaves_no_partial_file_and_resumes(fg_bin, dirs):
             "--stats", outdir / "w.####.json", "--skip-existing"]
     with reaped(subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                  env=clean_env())) as proc:
-        read_until(proc, b"frame 2/2 (2)")
+        read_stderr_until(proc, b"frame 2/2 (2)", timeout=120)
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=30)
     assert listing(outdir) == ["w.0001.exr", "w.0001.json"]

@@ -46,6 +46,22 @@ def expected_scan_window(data, display, scan_w):
             math.ceil(exact[3])), [float(e) for e in exact], scan_h
 
 
+def render_at_scan(run, src, out, options, scan, data, display):
+    """Renders `src` (data window `data`, display window `display`) to `out`
+    with `--filmgrain:<options>:scan=<scan>` and --stats (`out` with .json)
+    and asserts that it succeeded and that the negative's data window is
+    expected_scan_window's. Returns the output's spec, the stats'
+    data_window, and expected_scan_window's result."""
+    stats = out.with_suffix(".json")
+    r = run(src, f"--filmgrain:{options}:scan={scan}", "-o", out, "--stats", stats)
+    assert r.returncode == 0, r.stderr
+    expected = expected_scan_window(data, display, scan)
+    x0, y0, x1, y1 = expected[0]
+    s = Exr(out).spec
+    assert (s.x, s.y, s.width, s.height) == (x0, y0, x1 - x0, y1 - y0)
+    return s, read_json(stats)["data_window"], expected
+
+
 def test_any_overscan_renders_at_any_scan(run, dirs):
     """A 2048x1556 display window with 155 px of overscan left and right and
     1 px above and below (the issue's plates), at proxy scans 256 and 1024:
@@ -59,15 +75,10 @@ def test_any_overscan_renders_at_any_scan(run, dirs):
     data = (-155, -1, 2048 + 310, 1556 + 2)
     write_windowed(indir / "plate.exr", data, display)
     for scan in (256, 1024):
-        out, stats = outdir / f"n{scan}.exr", outdir / f"n{scan}.json"
-        r = run(indir / "plate.exr", f"--filmgrain:width_mm=24.89:scan={scan}", "-o", out,
-                "--stats", stats)
-        assert r.returncode == 0, r.stderr
-        (x0, y0, x1, y1), exact, scan_h = expected_scan_window(data, display, scan)
-        s = Exr(out).spec
+        out = outdir / f"n{scan}.exr"
+        s, st, ((x0, y0, x1, y1), exact, scan_h) = render_at_scan(
+            run, indir / "plate.exr", out, "width_mm=24.89", scan, data, display)
         assert (s.full_x, s.full_y, s.full_width, s.full_height) == (0, 0, scan, scan_h)
-        assert (s.x, s.y, s.width, s.height) == (x0, y0, x1 - x0, y1 - y0)
-        st = read_json(stats)["data_window"]
         assert (st["x"], st["y"], st["width"], st["height"]) == (x0, y0, x1 - x0, y1 - y0)
         assert np.allclose(st["exact"], exact, rtol=0, atol=1e-9)
         rounded = [x0, y0, x1, y1] != exact
@@ -102,17 +113,12 @@ def test_a_data_window_inside_the_display_window_is_kept_in_proportion(run, dirs
     display, data = (0, 0, 64, 48), (12, 9, 40, 30)
     write_windowed(indir / "crop.exr", data, display)
     for scan in (128, 100):
-        out, stats = outdir / f"c{scan}.exr", outdir / f"c{scan}.json"
-        r = run(indir / "crop.exr", f"--filmgrain:{FAST}:scan={scan}", "-o", out,
-                "--stats", stats)
-        assert r.returncode == 0, r.stderr
-        (x0, y0, x1, y1), exact, scan_h = expected_scan_window(data, display, scan)
-        s = Exr(out).spec
+        s, st, (_, exact, scan_h) = render_at_scan(
+            run, indir / "crop.exr", outdir / f"c{scan}.exr", FAST, scan, data, display)
         assert (s.full_width, s.full_height) == (scan, scan_h)
-        assert (s.x, s.y, s.width, s.height) == (x0, y0, x1 - x0, y1 - y0)
         for got, want in zip((s.x, s.y, s.x + s.width, s.y + s.height), exact):
             assert abs(got - want) < 1.0
-        assert read_json(stats)["data_window"]["rounded"] == (scan == 100)
+        assert st["rounded"] == (scan == 100)
 
 
 def test_roi_and_tiles_are_crops_of_the_whole_render(run, dirs):

@@ -29,19 +29,32 @@ def gradient(width, height):
     return img
 
 
+def wedge_args(options):
+    """The arguments of a wedge scene: the README's main job (--wedge) with
+    the one-layer stock, scanned small (1008x96 input over a 2 mm frame
+    scanned at 168x16: 11.9 um pixels), seed 1; `options` end the
+    --filmgrain option string."""
+    return ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
+            ":width_mm=2:scan=168x16:seed=1:" + options]
+
+
+def three_layer_args(options):
+    """The arguments of a gradient scene: the three-layer stock (one layer
+    with two populations) over a 1 mm frame, seed 2; `options` end the
+    --filmgrain option string."""
+    return ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:" + options]
+
+
 SCENES = {
-    # The README's main job (--wedge) with a one-layer stock, scanned small:
-    # 1008x96 input over a 2 mm frame scanned at 168x16 (11.9 um pixels).
+    # The README's main job with a one-layer stock (wedge_args).
     "wedge_one_layer": {
         "input": None,
-        "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
-                 ":width_mm=2:scan=168x16:seed=1:engine=exact:edge=gate"],
+        "args": wedge_args("engine=exact:edge=gate"),
     },
-    # A 40x30 RGB gradient through three layers (one with two populations).
+    # A 40x30 RGB gradient through three layers (three_layer_args).
     "gradient_three_layer": {
         "input": (40, 30),
-        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=exact"
-                 ":edge=gate"],
+        "args": three_layer_args("engine=exact:edge=gate"),
     },
     # A scan of another size than the input: 32x24 in, 48x36 out (ratio 1.5,
     # so scan pixels straddle input pixels).
@@ -58,18 +71,15 @@ SCENES = {
     # deterministic too (tables' Monte Carlo streams are seeded).
     "wedge_one_layer_auto": {
         "input": None,
-        "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
-                 ":width_mm=2:scan=168x16:seed=1:engine=auto:edge=gate"],
+        "args": wedge_args("engine=auto:edge=gate"),
     },
     "gradient_three_layer_kernel": {
         "input": (40, 30),
-        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=fast"
-                 ":kinetics=curve:edge=gate"],
+        "args": three_layer_args("engine=fast:kinetics=curve:edge=gate"),
     },
     "gradient_three_layer_fast": {
         "input": (40, 30),
-        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=fast"
-                 ":kinetics=table:edge=gate"],
+        "args": three_layer_args("engine=fast:kinetics=table:edge=gate"),
     },
     # The scenes above keep edge=gate (no light beyond the frame, the rule
     # before MODEL.md 2 continued the scene): their references are those
@@ -77,12 +87,11 @@ SCENES = {
     # (edge=clamp, the default), references made with it.
     "wedge_one_layer_clamp": {
         "input": None,
-        "args": ["--wedge", "--filmgrain:stock={stocks}/one_layer.json"
-                 ":width_mm=2:scan=168x16:seed=1:engine=exact"],
+        "args": wedge_args("engine=exact"),
     },
     "gradient_three_layer_clamp": {
         "input": (40, 30),
-        "args": ["--filmgrain:stock={stocks}/three_layer.json:width_mm=1:seed=2:engine=exact"],
+        "args": three_layer_args("engine=exact"),
     },
 }
 

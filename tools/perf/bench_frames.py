@@ -399,17 +399,23 @@ def yes_no(ok):
     return "yes" if ok else "**no**"
 
 
+def table_head(title, columns):
+    """Markdown lines: the heading of section `title` and the head of its
+    table, with `columns`."""
+    return [f"### {title}", "", "| " + " | ".join(columns) + " |", "|" + " --- |" * len(columns)]
+
+
+def of_kind(rows, kind):
+    """The rows of one table: `rows` whose kind is `kind`."""
+    return [r for r in rows if r["kind"] == kind]
+
+
 def render_tables(rows):
-    L = []
-    L.append("### Targets")
-    L.append("")
-    L.append("| case | what | wall s (min of runs) | CPU s | wall if idle (est.) | target | "
-             "wall / target | idle est. / target | peak memory | memory target | grains | "
-             "grains/s (wall) | grains per CPU-s | paths |")
-    L.append("|" + " --- |" * 14)
-    for r in rows:
-        if r["kind"] != "target":
-            continue
+    L = table_head("Targets", [
+        "case", "what", "wall s (min of runs)", "CPU s", "wall if idle (est.)", "target",
+        "wall / target", "idle est. / target", "peak memory", "memory target", "grains",
+        "grains/s (wall)", "grains per CPU-s", "paths"])
+    for r in of_kind(rows, "target"):
         s = r["run"]
         t = r["time_target_s"]
         if s["timed_out"]:
@@ -461,14 +467,10 @@ def render_tables(rows):
                  f"{ratio} | {idle_ratio} | {mem} | {mt} | {gtxt} | {g_wall} | {g_cpu} | "
                  f"{paths} |")
     L.append("")
-    L.append("### Ratios (measured in the same run)")
-    L.append("")
-    L.append("| case | what | ratio (wall) | ratio (CPU or idle estimate) | target | met (wall) | "
-             "met (CPU / idle est.) | runs (wall s, CPU s) | notes |")
-    L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for r in rows:
-        if r["kind"] != "ratio":
-            continue
+    L += table_head("Ratios (measured in the same run)", [
+        "case", "what", "ratio (wall)", "ratio (CPU or idle estimate)", "target", "met (wall)",
+        "met (CPU / idle est.)", "runs (wall s, CPU s)", "notes"])
+    for r in of_kind(rows, "ratio"):
         runs = "; ".join(f"{s['label']}: {s['wall_min']:.2f}, {s['cpu_min']:.2f}"
                          for s in r["runs"])
         L.append(f"| {r['case']} | {r['what']} | {r['ratio']:.2f} | {r['ratio_cpu']:.2f} "
@@ -476,14 +478,10 @@ def render_tables(rows):
                  f"{yes_no(r['ok_cpu'])} | "
                  f"{runs} | {r['extra']} |")
     L.append("")
-    L.append("### Throughput")
-    L.append("")
-    L.append("| run | paths | wall s | CPU s | grains | absorbed photons | grains/s (wall) | "
-             "grains per CPU-s | photons/s (wall) | photons per CPU-s |")
-    L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for r in rows:
-        if r["kind"] != "throughput":
-            continue
+    L += table_head("Throughput", [
+        "run", "paths", "wall s", "CPU s", "grains", "absorbed photons", "grains/s (wall)",
+        "grains per CPU-s", "photons/s (wall)", "photons per CPU-s"])
+    for r in of_kind(rows, "throughput"):
         s = r["run"]
         if not s["ok"]:
             L.append(f"| {r['what']} | failed | | | | | | | | |")
@@ -506,13 +504,21 @@ CASES = {
 }
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+def frame_parser(doc):
+    """The command line of the whole-frame scripts (this one and
+    profile_frames.py), described by the first paragraph of `doc`: --bin,
+    --out and --cache (where the inputs are generated once)."""
+    ap = argparse.ArgumentParser(description=doc.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bin", default="build/plugin/filmgrain")
     ap.add_argument("--out", default="docs/performance")
     ap.add_argument("--cache", default=os.path.join(os.path.expanduser("~"), ".cache",
                                                     "filmgrain-perf"))
+    return ap
+
+
+def main(argv=None):
+    ap = frame_parser(__doc__)
     ap.add_argument("--only", default=None, help="comma-separated cases: " + ",".join(CASES))
     ap.add_argument("--quick", action="store_true", help="one repeat; 8K instead of 16K")
     ap.add_argument("--repeats", type=int, default=2,

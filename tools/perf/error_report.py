@@ -688,6 +688,22 @@ def pixel_t_cell(r):
     return "identical" if r["identical"] else f"{fmt_g(r['T_rms'])} / {fmt_g(r['T_max'])}"
 
 
+def config_table(rows, columns, cells):
+    """Markdown lines of a scene's table, one row per configuration: the
+    columns every scene has (name, path, times) and then `columns`, whose
+    cells `cells(row)` gives, then the pixel and developed-fraction ones."""
+    head = ["configuration", "path (first layer)", "CPU s", "wall s", "speed-up (CPU)",
+            *columns, "pixel T RMS / max", "developed p (min over layers)"]
+    L = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for r in rows:
+        name = f"**{r['config']}** (default)" if r["default"] else r["config"]
+        row = [name, f"`{r['path']}`", f"{r['cpu_s']:.2f}", f"{r['wall_s']:.2f}",
+               f"{r['cpu_speedup']:.2f}x", *cells(r), pixel_t_cell(r),
+               fmt_g(r["developed_p_min"], 3)]
+        L.append("| " + " | ".join(row) + " |")
+    return L
+
+
 def fmt_g(v, sig=2):
     if v is None or v != v:
         return "n/a"
@@ -1309,41 +1325,26 @@ def write_markdown(args, summary, steps_rows, acceptance, acceptance_natural, el
                      f"blocks {g['block_px']} px; aperture {g['aperture_um']:g} um = "
                      f"{g['aperture_px']:.2f} px.")
             L.append("")
-            L.append("| configuration | path (first layer) | CPU s | wall s | speed-up (CPU) | "
-                     "table setup s | engine's error estimate | max abs bias mean D (95% CI, step) "
-                     "| max abs bias macro D | steps with CI excluding 0 | max abs(G ratio - 1) "
-                     "(median CI) | max abs(NPS ratio - 1), octave bands | pixel T RMS / max | "
-                     "developed p (min over layers) |")
-            L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-            for r in rows:
-                pix = pixel_t_cell(r)
-                L.append(
-                    f"| {'**' + r['config'] + '** (default)' if r['default'] else r['config']} | "
-                    f"`{r['path']}` | {r['cpu_s']:.2f} | {r['wall_s']:.2f} | "
-                    f"{r['cpu_speedup']:.2f}x | {r['setup_s']:.2f} | {fmt_g(r['error_estimate'])} | "
-                    f"{fmt(r['max_abs_bias_mean'])} (+-{fmt(r['ci_at_max'])}, {r['step_at_max']}) | "
-                    f"{fmt(r['max_abs_bias_macro'])} | {r['steps_ci_excl_0']}/{r['steps']} | "
-                    f"{fmt(r['max_abs_g_err'], 3)} (+-{fmt(r['median_g_ci'], 3)}) | "
-                    f"{fmt(r['max_abs_nps_err'], 3)} | {pix} | "
-                    f"{fmt_g(r['developed_p_min'], 3)} |")
+            L.extend(config_table(
+                rows,
+                ["table setup s", "engine's error estimate", "max abs bias mean D (95% CI, step)",
+                 "max abs bias macro D", "steps with CI excluding 0",
+                 "max abs(G ratio - 1) (median CI)", "max abs(NPS ratio - 1), octave bands"],
+                lambda r: [f"{r['setup_s']:.2f}", fmt_g(r["error_estimate"]),
+                           f"{fmt(r['max_abs_bias_mean'])} (+-{fmt(r['ci_at_max'])}, "
+                           f"{r['step_at_max']})",
+                           fmt(r["max_abs_bias_macro"]), f"{r['steps_ci_excl_0']}/{r['steps']}",
+                           f"{fmt(r['max_abs_g_err'], 3)} (+-{fmt(r['median_g_ci'], 3)})",
+                           fmt(r["max_abs_nps_err"], 3)]))
         else:
             L.append(f"Scan pixels {g['pitch_um']:.3g} um; blocks {g['block_px']} px; "
                      f"{g['edge_blocks']} of {g['blocks']} blocks per layer are 'edge' blocks "
                      "(top quartile of relative luminance std in the input).")
             L.append("")
-            L.append("| configuration | path (first layer) | CPU s | wall s | speed-up (CPU) | "
-                     "bias mean D, all blocks (95% CI) | edge blocks | flat blocks | "
-                     "pixel T RMS / max | developed p (min over layers) |")
-            L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-            for r in rows:
-                pix = pixel_t_cell(r)
-                L.append(
-                    f"| {'**' + r['config'] + '** (default)' if r['default'] else r['config']} | "
-                    f"`{r['path']}` | {r['cpu_s']:.2f} | {r['wall_s']:.2f} | "
-                    f"{r['cpu_speedup']:.2f}x | {fmt(r['bias_all'])} (+-{fmt(r['ci_all'])}) | "
-                    f"{fmt(r['bias_edge'])} (+-{fmt(r['ci_edge'])}) | "
-                    f"{fmt(r['bias_flat'])} (+-{fmt(r['ci_flat'])}) | {pix} | "
-                    f"{fmt_g(r['developed_p_min'], 3)} |")
+            L.extend(config_table(
+                rows, ["bias mean D, all blocks (95% CI)", "edge blocks", "flat blocks"],
+                lambda r: [f"{fmt(r[f'bias_{b}'])} (+-{fmt(r[f'ci_{b}'])})"
+                           for b in ("all", "edge", "flat")]))
         L.append("")
 
     # Per-step table for the default.

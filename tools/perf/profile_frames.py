@@ -41,7 +41,6 @@ Writes profile.md (and profile.json) into --out; the inputs come from
 bench_frames.py's cache (made there if missing).
 """
 
-import argparse
 import collections
 import json
 import os
@@ -151,12 +150,7 @@ def profile_case(binary, name, argv, freq, work):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--bin", default="build/plugin/filmgrain")
-    ap.add_argument("--out", default="docs/performance")
-    ap.add_argument("--cache", default=os.path.join(os.path.expanduser("~"), ".cache",
-                                                    "filmgrain-perf"))
+    ap = bench_frames.frame_parser(__doc__)
     ap.add_argument("--freq", type=int, default=199, help="samples per second per thread")
     args = ap.parse_args(argv)
     binary = os.path.abspath(args.bin)

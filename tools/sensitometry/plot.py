@@ -40,6 +40,16 @@ def save(fig, out, name):
     plt.close(fig)
 
 
+def label_panel(ax, xlabel, ylabel, heading, **legend):
+    """Labels a panel as the others: axis labels, a small heading, a light
+    grid and a small legend (`legend`: its other arguments)."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(heading, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, **legend)
+
+
 def plot_curves(out, res):
     stocks = [s for s in ("paper", "color-negative") if os.path.exists(os.path.join(out, f"curve_{s}.csv"))]
     if not stocks:
@@ -63,13 +73,10 @@ def plot_curves(out, res):
             yc = float(np.interp(xc, x, d))
             gx = np.array([xc - 0.5, xc + 0.5])
             ax.plot(gx, yc + m["gamma"] * (gx - xc), "--", lw=0.8, color=c)
-        ax.set_xlabel("log10 H (lux-seconds)")
-        ax.set_ylabel("density")
-        ax.set_title(f"{stock}: characteristic curve, {res['curves'][stock]['shutter_s']:g} s "
-                     f"({res['engine']} engine)", fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, title="o speed point (fog+0.1), □ +1.30 log H, -- gamma",
-                  title_fontsize=7)
+        label_panel(ax, "log10 H (lux-seconds)", "density",
+                    f"{stock}: characteristic curve, {res['curves'][stock]['shutter_s']:g} s "
+                    f"({res['engine']} engine)",
+                    title="o speed point (fog+0.1), □ +1.30 log H, -- gamma", title_fontsize=7)
     save(fig, out, "characteristic_curves.png")
 
 
@@ -87,81 +94,80 @@ def plot_reciprocity(out, res):
         ax.plot(lt, (1 - r["schwarzschild_p"]) * lt + r["schwarzschild_intercept"], "-", lw=4,
                 alpha=0.3, color=c,
                 label=f"Schwarzschild fit t >= 10 s: p = {r['schwarzschild_p']:.3f}")
-    ax.set_xlabel("log10 exposure time t (s)")
-    ax.set_ylabel("log10 H for net density 1.0 (lux-seconds)")
-    ax.set_title(f"Reciprocity: exposure for D = 1.0 above fog ({res['engine']} engine)", fontsize=9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    label_panel(ax, "log10 exposure time t (s)", "log10 H for net density 1.0 (lux-seconds)",
+                f"Reciprocity: exposure for D = 1.0 above fog ({res['engine']} engine)")
     save(fig, out, "reciprocity.png")
 
 
-def plot_grain_size(out, res):
-    path = os.path.join(out, "grain_size_curves.csv")
-    if not os.path.exists(path):
-        return
-    rows = read_csv(path)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for d in dict.fromkeys(r["diameter_um"] for r in rows):
-        lr = [r for r in rows if r["diameter_um"] == d]
-        a1.errorbar(col(lr, "log10_h_lxs"), col(lr, "density"), yerr=col(lr, "density_se"),
-                    fmt=".-", ms=3, lw=0.8, label=f"{float(d):g} um")
-    a1.set_xlabel("log10 H (lux-seconds)")
-    a1.set_ylabel("density")
-    a1.set_title(f"Same stock, grain diameter changed only ({res['engine']} engine)", fontsize=9)
-    a1.grid(alpha=0.3)
-    a1.legend(fontsize=7, title="mean diameter", title_fontsize=7)
+def speed_panel(ax, out, res):
+    """ISO speed against grain diameter: grain_size.png's right panel."""
     g = res["grain_size"]
     d = np.array([x["diameter_um"] for x in g])
     s = np.array([x["iso_speed"] for x in g])
-    a2.loglog(d, s, "o-", label="ISO speed 0.8 / H_m (measured)")
-    a2.loglog(d, s[list(d).index(6.0)] * (d / 6.0) ** 2 if 6.0 in d else s, ":",
+    ax.loglog(d, s, "o-", label="ISO speed 0.8 / H_m (measured)")
+    ax.loglog(d, s[list(d).index(6.0)] * (d / 6.0) ** 2 if 6.0 in d else s, ":",
               label="proportional to d^2 (photons per grain)")
-    a2.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    a2.set_xticks(d)
-    a2.set_xticklabels([f"{v:g}" for v in d])
-    a2.set_xlabel("mean grain diameter (um)")
-    a2.set_ylabel("ISO speed")
-    a2.grid(alpha=0.3, which="both")
-    a2.legend(fontsize=7)
-    save(fig, out, "grain_size.png")
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_xticks(d)
+    ax.set_xticklabels([f"{v:g}" for v in d])
+    ax.set_xlabel("mean grain diameter (um)")
+    ax.set_ylabel("ISO speed")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
 
 
-def plot_development(out, res):
-    path = os.path.join(out, "development_curves.csv")
-    if not os.path.exists(path):
-        return
-    rows = read_csv(path)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for t in dict.fromkeys(r["development_time_s"] for r in rows):
-        lr = [r for r in rows if r["development_time_s"] == t]
-        a1.errorbar(col(lr, "log10_h_lxs"), col(lr, "density"), yerr=col(lr, "density_se"),
-                    fmt=".-", ms=3, lw=0.8, label=f"{float(t):g} s")
-    a1.set_xlabel("log10 H (lux-seconds)")
-    a1.set_ylabel("density")
-    a1.set_title(f"paper stock, development time varied ({res['engine']} engine)", fontsize=9)
-    a1.grid(alpha=0.3)
-    a1.legend(fontsize=7, title="development", title_fontsize=7)
+def development_panel(ax, out, res):
+    """Gamma and fog against development time: development.png's right panel."""
     tab = read_csv(os.path.join(out, "development.csv"))
     t, g, gse = col(tab, "development_time_s"), col(tab, "gamma"), col(tab, "gamma_se")
     fit = res["development"]["fit"]
     tt = np.linspace(0, t.max() * 1.05, 200)
-    a2.errorbar(t, g, yerr=gse, fmt="o", color="k", label="gamma (measured)")
-    a2.plot(tt, fit["gamma_inf"] * (1 - np.exp(-fit["k_per_s"] * tt)), "-", color="k", lw=0.8,
+    ax.errorbar(t, g, yerr=gse, fmt="o", color="k", label="gamma (measured)")
+    ax.plot(tt, fit["gamma_inf"] * (1 - np.exp(-fit["k_per_s"] * tt)), "-", color="k", lw=0.8,
             label=f"gamma_inf (1 - exp(-k t)): gamma_inf = {fit['gamma_inf']:.2f}, "
                   f"k = {fit['k_per_s']:.4f}/s")
-    a2.set_xlabel("development time (s)")
-    a2.set_ylabel("gamma")
-    a2.grid(alpha=0.3)
-    b = a2.twinx()
+    ax.set_xlabel("development time (s)")
+    ax.set_ylabel("gamma")
+    ax.grid(alpha=0.3)
+    b = ax.twinx()
     b.errorbar(t, col(tab, "fog_density"), yerr=col(tab, "fog_density_se"), fmt="s",
                color="tab:orange", mfc="none", label="fog (measured)")
     b.plot(t, col(tab, "model_fog_density"), "x", color="tab:orange",
            label="fog, model 0.434 n E[a] (1 - exp(-t/fog_tau))")
     b.set_ylabel("base + fog density", color="tab:orange")
-    h1, l1 = a2.get_legend_handles_labels()
+    h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = b.get_legend_handles_labels()
-    a2.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower right")
-    save(fig, out, "development.png")
+    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower right")
+
+
+# The experiments that change one thing of a stock, a figure each: on the
+# left the characteristic curve at each value (column `key` of the curves
+# CSV), on the right what follows from them. Columns: figure, curves CSV,
+# key, its unit, title, legend title, right panel.
+CURVE_FAMILIES = (
+    ("grain_size.png", "grain_size_curves.csv", "diameter_um", "um",
+     "Same stock, grain diameter changed only", "mean diameter", speed_panel),
+    ("development.png", "development_curves.csv", "development_time_s", "s",
+     "paper stock, development time varied", "development", development_panel),
+)
+
+
+def plot_curve_families(out, res):
+    """The figures of CURVE_FAMILIES, of each experiment that was run."""
+    for png, name, key, unit, title, legend_title, right_panel in CURVE_FAMILIES:
+        path = os.path.join(out, name)
+        if not os.path.exists(path):
+            continue
+        rows = read_csv(path)
+        fig, (ax, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+        for v in dict.fromkeys(r[key] for r in rows):
+            lr = [r for r in rows if r[key] == v]
+            ax.errorbar(col(lr, "log10_h_lxs"), col(lr, "density"), yerr=col(lr, "density_se"),
+                        fmt=".-", ms=3, lw=0.8, label=f"{float(v):g} {unit}")
+        label_panel(ax, "log10 H (lux-seconds)", "density", f"{title} ({res['engine']} engine)",
+                    title=legend_title, title_fontsize=7)
+        right_panel(right, out, res)
+        save(fig, out, png)
 
 
 def plot_granularity(out, res):
@@ -205,11 +211,8 @@ def plot_granularity(out, res):
     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_xticks(a)
     ax.set_xticklabels([f"{v:g}" for v in a])
-    ax.set_xlabel("aperture diameter (um)")
-    ax.set_ylabel("Selwyn G (um)")
-    ax.set_title(f"Selwyn's law, paper stock at D = 1.0 ({res['engine']} engine)", fontsize=9)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    label_panel(ax, "aperture diameter (um)", "Selwyn G (um)",
+                f"Selwyn's law, paper stock at D = 1.0 ({res['engine']} engine)")
     save(fig, out, "selwyn.png")
 
     rows = [r for r in read_csv(path) if r["stock"] in ("paper", "dense")]
@@ -584,8 +587,7 @@ def main():
         res = json.load(f)
     plot_curves(out, res)
     plot_reciprocity(out, res)
-    plot_grain_size(out, res)
-    plot_development(out, res)
+    plot_curve_families(out, res)
     plot_granularity(out, res)
     plot_wedge(out, res)
     summary(out, res)
