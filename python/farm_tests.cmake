@@ -7,12 +7,8 @@
 # module's conftest.py imports the extension).
 # RUN_SERIAL: the lost-worker test kills a worker while frames run, and each
 # test starts worker processes; about 50 s on 2 loaded cores.
-add_test(NAME python.farm
-  COMMAND ${FILMGRAIN_PYTHON} -m pytest -q -p no:cacheprovider --noconftest
-          --rootdir=${CMAKE_CURRENT_LIST_DIR}
-          --basetemp=${CMAKE_CURRENT_BINARY_DIR}/tmp-farm
-          ${CMAKE_CURRENT_LIST_DIR}/tests/test_farm.py)
-set_tests_properties(python.farm PROPERTIES
-  ENVIRONMENT "FILMGRAIN_BIN=$<TARGET_FILE:filmgrain>;PYTHONPATH=${CMAKE_CURRENT_LIST_DIR};PYTHONDONTWRITEBYTECODE=1"
-  RUN_SERIAL TRUE LABELS python
-  TIMEOUT 600)
+filmgrain_add_pytest(NAME python.farm SPEC ${CMAKE_CURRENT_LIST_DIR}/tests/test_farm.py
+                     ROOTDIR ${CMAKE_CURRENT_LIST_DIR} ARGS --noconftest
+                     TIMEOUT 600 LABELS python
+                     ENVIRONMENT "PYTHONPATH=${CMAKE_CURRENT_LIST_DIR}")
+set_tests_properties(python.farm PROPERTIES RUN_SERIAL TRUE)
