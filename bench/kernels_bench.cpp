@@ -219,40 +219,41 @@ std::vector<std::pair<double, double>> random_centres()
     return centres;
 }
 
-void BM_ExposureDisc(benchmark::State& state)
+/// The loop of the exposure benchmarks: read(ex, x, y) at 4096 random
+/// points of the fixture's plane with input pixels of pitch_um; items are
+/// reads.
+template <class Read>
+void time_exposure(benchmark::State& state, double pitch_um, Read&& read)
 {
     static ExposureFixture fx;
-    const double pitch_um = 1.0;
-    const double r_um     = 0.5 * pitch_um * static_cast<double>(state.range(0)) / 4.0;
     const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, pitch_um, kNoSaturation,
                            FrameEdge::clamp);
     const auto centres = random_centres();
-    size_t i  = 0;
+    size_t i   = 0;
     double sum = 0.0;
     for (auto _ : state) {
         const auto& c = centres[i++ & 4095];
-        sum += ex.integrate_over_disc(c.first, c.second, r_um);
+        sum += read(ex, c.first, c.second);
     }
     benchmark::DoNotOptimize(sum);
     state.SetItemsProcessed(state.iterations());
+}
+
+void BM_ExposureDisc(benchmark::State& state)
+{
+    const double r_um = 0.5 * static_cast<double>(state.range(0)) / 4.0;  // 1 um pixels
+    time_exposure(state, 1.0, [&](const LayerExposure& ex, double x, double y) {
+        return ex.integrate_over_disc(x, y, r_um);
+    });
 }
 // Disc diameter / input pixel = 0.25, 0.5, 1, 2, 4, 8.
 BENCHMARK(BM_ExposureDisc)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32);
 
 void BM_ExposureCentre(benchmark::State& state)
 {
-    static ExposureFixture fx;
-    const LayerExposure ex(fx.view, { 0.2126, 0.7152, 0.0722 }, 1.0, kNoSaturation,
-                           FrameEdge::clamp);
-    const auto centres = random_centres();
-    size_t i  = 0;
-    double sum = 0.0;
-    for (auto _ : state) {
-        const auto& c = centres[i++ & 4095];
-        sum += ex.value_at(c.first, c.second) * M_PI;
-    }
-    benchmark::DoNotOptimize(sum);
-    state.SetItemsProcessed(state.iterations());
+    time_exposure(state, 1.0, [](const LayerExposure& ex, double x, double y) {
+        return ex.value_at(x, y) * M_PI;
+    });
 }
 BENCHMARK(BM_ExposureCentre);
 
