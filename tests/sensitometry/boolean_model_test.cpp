@@ -8,6 +8,7 @@
 
 #include "expect/boolean_model.h"
 #include "expect/expected_curve_model.h"
+#include "testing/test_layers.h"
 
 namespace filmgrain::sensitometry {
 namespace {
@@ -49,10 +50,7 @@ TEST(BooleanModel, MonodisperseCovarianceIsClosedForm)
 TEST(BooleanModel, CouplerLimitedCovarianceIsClosedForm)
 {
     Layer layer;
-    layer.image                = LayerImage::dye;
-    layer.cloud_profile        = CloudProfile::disc;
-    layer.cloud_diameter_ratio = 1.5;
-    layer.cloud_density        = 0.8;
+    make_dye(layer, CloudProfile::disc, 1.5, 0.8);
     Population limited;
     limited.max_dye_density = 0.6;
     const ImageOverlap image(layer);

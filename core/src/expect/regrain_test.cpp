@@ -45,13 +45,20 @@ Stock three_layer_stock(const std::array<std::array<double, 3>, 3>& rows)
     return stock;
 }
 
+/// The preset `name` (checked to have `layers` layers) and its regrain
+/// model on synthetic curves.
+void load_with_model(const std::string& name, size_t layers, Stock& stock, RegrainModel& m)
+{
+    ASSERT_TRUE(load_stock(name, stock));
+    ASSERT_EQ(stock.layers.size(), layers);
+    ASSERT_TRUE(make_regrain_model(stock, synthetic_curves(layers), m));
+}
+
 TEST(Regrain, ThreeLayersInvertTheSensitivityMatrix)
 {
     Stock stock;
-    ASSERT_TRUE(load_stock("color-negative", stock));
-    ASSERT_EQ(stock.layers.size(), 3u);
     RegrainModel m;
-    ASSERT_TRUE(make_regrain_model(stock, synthetic_curves(3), m));
+    ASSERT_NO_FATAL_FAILURE(load_with_model("color-negative", 3, stock, m));
     // to_rgb M = I: entries of M are <= 1 and det 0.72, so the inverse's
     // products carry a few ulps of 1 (2.2e-16 each): 1e-14 is far above.
     for (size_t i = 0; i < 3; ++i)
@@ -66,10 +73,8 @@ TEST(Regrain, ThreeLayersInvertTheSensitivityMatrix)
 TEST(Regrain, OneLayerRowsShareTheSumOfItsWeights)
 {
     Stock stock;
-    ASSERT_TRUE(load_stock("paper", stock));
-    ASSERT_EQ(stock.layers.size(), 1u);
     RegrainModel m;
-    ASSERT_TRUE(make_regrain_model(stock, synthetic_curves(1), m));
+    ASSERT_NO_FATAL_FAILURE(load_with_model("paper", 1, stock, m));
     const auto& s = stock.layers[0].sensitivity;
     for (const auto& row : m.to_rgb) {
         EXPECT_EQ(row[0], 1.0 / (s[0] + s[1] + s[2]));

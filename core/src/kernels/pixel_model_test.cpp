@@ -18,6 +18,7 @@
 #include "util/rng.h"
 #include "util/sampling.h"
 #include "testing/test_tables.h"
+#include "testing/test_layers.h"
 
 namespace filmgrain {
 namespace {
@@ -201,10 +202,7 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
     const std::vector<PixelPopulation>& pops = t.pops;
     for (const CloudProfile profile : { CloudProfile::disc, CloudProfile::gaussian }) {
         Layer layer;
-        layer.image                = LayerImage::dye;
-        layer.cloud_profile        = profile;
-        layer.cloud_diameter_ratio = profile == CloudProfile::disc ? 1.5 : 0.9;
-        layer.cloud_density        = 0.7;
+        make_dye(layer, profile, profile == CloudProfile::disc ? 1.5 : 0.9, 0.7);
         const ImageOverlap image(layer);
         for (double v : { 0.4, 1.0 }) {
             const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, image);
@@ -236,11 +234,8 @@ TEST(PixelModel, CouplerLimitedMomentsMatchTheCloudsGrainByGrain)
     fine.diameter_um    = 0.4;
     const PopulationGrains fine_grains(fine, 1, 0, 1);
     Layer layer;
-    layer.image                = LayerImage::dye;
-    layer.cloud_profile        = CloudProfile::disc;
-    layer.cloud_diameter_ratio = 1.5;
-    layer.cloud_density        = 0.7;
-    layer.populations          = { t.pop, fine };
+    make_dye(layer, CloudProfile::disc, 1.5, 0.7);
+    layer.populations = { t.pop, fine };
     layer.populations[0].max_dye_density = 0.45;
     const std::vector<PixelPopulation> pops {
         { &layer.populations[0], &t.grains, 40.0, &t.curve, &t.table },

@@ -12,6 +12,7 @@
 #include "filmgrain/expected_curve.h"
 #include "filmgrain/render.h"
 #include "testing/test_render.h"
+#include "testing/test_layers.h"
 
 namespace filmgrain {
 namespace {
@@ -221,11 +222,8 @@ TEST(Dye, CloudAreaFactorIsTheBlockingIntegral)
         for (double ratio : { 0.5, 1.0, 2.5 })
             for (double density : { 1e-7, 0.05, 0.7, 3.0, 20.0 }) {
                 Layer l;
-                l.image                = LayerImage::dye;
-                l.cloud_profile        = profile;
-                l.cloud_diameter_ratio = ratio;
-                l.cloud_density        = density;
-                const double expected  = blocking_numeric(l);
+                make_dye(l, profile, ratio, density);
+                const double expected = blocking_numeric(l);
                 EXPECT_NEAR(cloud_area_factor(l), expected, 1e-6 * expected + 1e-12)
                     << cloud_profile_name(profile) << " ratio " << ratio << " density " << density;
             }
@@ -236,10 +234,7 @@ TEST(Dye, OneCloudInAPixel)
     // One gaussian cloud in the middle of a 20 um pixel: the sampled mean of
     // 10^-D against the blocking integral (the cloud lies well inside).
     Layer l;
-    l.image                = LayerImage::dye;
-    l.cloud_profile        = CloudProfile::gaussian;
-    l.cloud_diameter_ratio = 1.5;
-    l.cloud_density        = 0.8;
+    make_dye(l, CloudProfile::gaussian, 1.5, 0.8);
     const std::vector<Disc> grains = { { 10.0, 10.0, 1.0 } };
     DyeScratch scratch;
     double t_coarse = 0.0, t_fine = 0.0;
@@ -257,11 +252,7 @@ TestScene dye_scene(CloudProfile profile, double ratio, double density, float va
 {
     TestScene s;
     EXPECT_TRUE(load_stock("paper", s.stock));
-    Layer& l               = s.stock.layers[0];
-    l.image                = LayerImage::dye;
-    l.cloud_profile        = profile;
-    l.cloud_diameter_ratio = ratio;
-    l.cloud_density        = density;
+    make_dye(s.stock.layers[0], profile, ratio, density);
     s.scene.frame_width_mm = 1.2;
     s.pixels.assign(96 * 96, value);
     s.view = ImageView { s.pixels.data(), 96, 96, 1 };
