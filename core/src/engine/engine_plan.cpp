@@ -356,7 +356,7 @@ LayerPlan start_layer(const PlanContext& c, size_t l, const LayerExposure& expos
                       std::shared_ptr<const FramePlane> log_factor)
 {
     const Layer& layer = c.stock.layers[l];
-    LayerPlan plan { exposure, {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", 0.0,
+    LayerPlan plan { exposure, {}, CoverageMethod::exact, 0, 0.0, nullptr, 0, "", "", {}, 0.0,
                      setup_seconds, std::move(spread), std::move(log_factor) };
     const ExposureMethod method = choose_exposure(c);
     double margin_um            = 0.0;
@@ -424,13 +424,7 @@ void plan_unlit_layers(const PlanContext& c, std::vector<LayerPlan>& out)
             if (c.settings.grains != GrainMethod::exact)
                 pp.fast = std::make_shared<const FastGrains>(pp.grains);
         }
-        std::ostringstream why;
-        why << "no light reaches the layer (every exposure value the render reads is 0; NaN and "
-               "negative values expose nothing): its grains develop by fog alone, P = f = "
-            << format_g(f)
-            << " each (MODEL.md 4), so only the developed ones are generated, the grain process "
-               "thinned to f (exact in distribution); ";
-        plan.reason += why.str();
+        plan.notes.fog_alone = true;
     }
 }
 
@@ -543,16 +537,9 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
                                                        c.frame_pixels());
             const double pixel_s  = path_cost::kPixelModelSeconds
                                    + pixel_path_seconds(c, c.frame_pixels());
-            std::ostringstream cost;
-            cost << "whole scan estimated " << format_g(grains_s) << " s grain by grain (the "
-                 << "fog's grains), " << format_g(pixel_s) << " s at pixel scale (with its "
-                 << "model's build): ";
-            if (grains_s <= pixel_s) {
-                plan.reason += cost.str() + "grain by grain; ";
+            plan.notes.unlit_scale = PlanNotes::UnlitScale { grains_s, pixel_s };
+            if (grains_s <= pixel_s)
                 continue;
-            }
-            plan.reason += cost.str() + "the pixel scale where its statistics describe the "
-                                        "layer; ";
         }
         if (!curves)
             return Status::errorf("scale=pixel: layer '", layer.name,
@@ -607,24 +594,7 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         // The table's interpolation error of the mean transmittance, as
         // density.
         plan.error_estimate += kLog10E * pm.max_mean_error();
-        std::ostringstream why;
-        why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
-            << " in " << format_g(pitch_um) << " um pixels, " << format_g(fog_grains)
-            << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
-               "(interpolation error: mean "
-            << format_g(pm.max_mean_error()) << ", sd " << format_g(pm.max_sd_error())
-            << "), two Gamma laws (covered and open part) weighted by the mean through a "
-               "Gaussian copula with the correlations to "
-            << pm.lags()
-            << " pixels each way (" << format_g(100.0 * pm.max_dropped_correlation())
-            << "% of their sum beyond; its filter on " << filter_lags(pm.lags())
-            << " lags, correlation error " << format_g(pm.max_copula_error()) << ")"
-            << (plan.inhibition ? ", every P thinned by the inhibitors' factor at the pixel's "
-                                  "centre (tabulated to log factor "
-                                      + format_g(max_log_factor) + ")"
-                                : "")
-            << "; ";
-        plan.reason += why.str();
+        plan.notes.pixel_scale = PlanNotes::PixelScale { pitch_um, fog_grains, max_log_factor };
     }
     return {};
 }

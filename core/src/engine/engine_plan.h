@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,39 @@ struct PopulationPlan {
     std::shared_ptr<const FastGrains> fast;
 };
 
+/// Why the choosers chose a layer's paths, as they found it: the --stats
+/// reason is written from these once (plan_report.cpp), with the plan.
+struct PlanNotes {
+    /// A population's kinetics, in the order the choosers decided them.
+    struct Kinetics {
+        enum class Kind {
+            size_dependent,  ///< rate_area_exponent != 0: no table, the chain
+            table_refused,   ///< a table would cost more than the chains
+            table,           ///< tabulated (and maybe folded into a curve)
+        };
+        Kind kind          = Kind::table;
+        size_t population  = 0;
+        size_t table       = 0;      ///< table: which (the requests' order)
+        bool capped        = false;  ///< table: brighter grains run the chain
+        double grain_steps = 0.0;    ///< table_refused: what the grains need
+    };
+    std::vector<Kinetics> kinetics;
+    /// No light reaches the layer: fog alone, its grains thinned to f.
+    bool fog_alone = false;
+    /// A layer no light reaches, its scale chosen by the whole scan's
+    /// estimated seconds per path.
+    struct UnlitScale {
+        double grain_s = 0.0, pixel_s = 0.0;
+    };
+    std::optional<UnlitScale> unlit_scale;
+    /// The pixel scale taken: the scan's pitch, developed grains per pixel
+    /// at zero exposure, the inhibitors' largest log factor tabulated.
+    struct PixelScale {
+        double pitch_um = 0.0, fog_grains = 0.0, max_log_factor = 0.0;
+    };
+    std::optional<PixelScale> pixel_scale;
+};
+
 /// Everything a tile needs about one layer.
 struct LayerPlan {
     LayerExposure exposure;
@@ -53,9 +87,11 @@ struct LayerPlan {
     /// pixels' normals (no grains are generated).
     std::shared_ptr<const PixelModel> pixel_model;
     uint64_t pixel_key = 0;
-    /// For the statistics: what runs, why, its error bound, setup time.
+    /// For the statistics: what runs, why (written from `notes`), its
+    /// error bound, setup time.
     std::string path;
     std::string reason;
+    PlanNotes notes;
     double error_estimate = 0.0;
     double setup_seconds  = 0.0;
     /// MODEL.md 9: the layer's spread exposure value over the whole input

@@ -3,6 +3,7 @@
 #include "engine/engine_plan.h"
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -79,6 +80,13 @@ TEST(EnginePlan, AnUnlitLayerGeneratesOnlyItsFogsGrainsWhereThatIsCheapest)
                             1e-12);
             }
             EXPECT_GT(plan.estimated_seconds, 0.0);
+            EXPECT_TRUE(plan.notes.fog_alone);
+            EXPECT_TRUE(plan.notes.kinetics.empty());
+            EXPECT_FALSE(plan.notes.pixel_scale);
+            if (engine == Engine::automatic) {  // chosen by cost: the grains
+                ASSERT_TRUE(plan.notes.unlit_scale);
+                EXPECT_LE(plan.notes.unlit_scale->grain_s, plan.notes.unlit_scale->pixel_s);
+            }
         }
     }
     // The exact engine is the reference: every grain, its chain.
@@ -113,6 +121,56 @@ TEST(EnginePlan, AnUnlitLayerOfAFineStockTakesThePixelScale)
             n += pop.grains_per_um2;
         EXPECT_NEAR(plan.pixel_model->at(0.0).developed_per_pixel / (f * n * pixel_um2), 1.0,
                     1e-9);
+        // Chosen by cost, and said so.
+        EXPECT_TRUE(plan.notes.fog_alone);
+        ASSERT_TRUE(plan.notes.unlit_scale);
+        EXPECT_GT(plan.notes.unlit_scale->grain_s, plan.notes.unlit_scale->pixel_s);
+        ASSERT_TRUE(plan.notes.pixel_scale);
+        EXPECT_NEAR(plan.notes.pixel_scale->pitch_um, std::sqrt(pixel_um2), 1e-9);
+        EXPECT_NEAR(plan.notes.pixel_scale->fog_grains / (f * n * pixel_um2), 1.0, 1e-9);
+    }
+}
+
+TEST(EnginePlan, TheNotesSayWhatTheKineticsChoosersFound)
+{
+    // A grey plate of the paper stock: each population's note says what
+    // its kinetics became: the chain on a 0.2 mm frame, whose few grains
+    // cost less than a table; a table on a Super 35 frame.
+    Stock stock;
+    ASSERT_TRUE(load_stock("paper", stock));
+    SceneSettings scene;
+    const Plate grey(48, 32, 0.18f, 0.18f, 0.18f);
+    using Kind = PlanNotes::Kinetics::Kind;
+    for (const auto& [width_mm, kind] :
+         { std::pair { 0.2, Kind::table_refused }, std::pair { 24.89, Kind::table } }) {
+        scene.frame_width_mm = width_mm;
+        for (const LayerPlan& plan : plan_of(stock, scene, grey)) {
+            ASSERT_EQ(plan.notes.kinetics.size(), plan.populations.size());
+            for (const PlanNotes::Kinetics& note : plan.notes.kinetics) {
+                const PopulationPlan& pp = plan.populations.at(note.population);
+                EXPECT_EQ(note.kind, kind) << width_mm;
+                EXPECT_EQ(note.kind == Kind::table, pp.table != nullptr) << width_mm;
+                if (note.kind == Kind::table_refused) {
+                    EXPECT_EQ(pp.kinetics, KineticsMethod::early_stop);
+                    EXPECT_GT(note.grain_steps, 0.0);
+                }
+            }
+            EXPECT_FALSE(plan.notes.fog_alone);
+        }
+    }
+    scene.frame_width_mm = 1.2;
+    // Sizes that change the rates: no table for any population, said so
+    // for each, in order.
+    for (Layer& layer : stock.layers)
+        for (Population& pop : layer.populations)
+            pop.rate_area_exponent = 0.5;
+    for (const LayerPlan& plan : plan_of(stock, scene, grey)) {
+        ASSERT_EQ(plan.notes.kinetics.size(), plan.populations.size());
+        for (size_t p = 0; p < plan.populations.size(); ++p) {
+            EXPECT_EQ(plan.notes.kinetics[p].kind, Kind::size_dependent);
+            EXPECT_EQ(plan.notes.kinetics[p].population, p);
+            EXPECT_EQ(plan.populations[p].kinetics, KineticsMethod::early_stop);
+        }
     }
 }
 

@@ -126,6 +126,75 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
            "plus the raster's modelled bias";
 }
 
+/// What the choosers found (plan.notes), in the order they found it:
+/// kinetics per population, fog alone, the scale.
+void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& plan,
+                    std::ostringstream& why)
+{
+    using Kind = PlanNotes::Kinetics::Kind;
+    for (const PlanNotes::Kinetics& k : plan.notes.kinetics) {
+        why << "population " << k.population;
+        if (k.kind == Kind::size_dependent) {
+            why << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
+                   "so no table: the chain runs until each outcome is decided; ";
+            continue;
+        }
+        if (k.kind == Kind::table_refused) {
+            why << ": a table of P(develop|N) would cost more chain steps than the ~"
+                << format_g(k.grain_steps)
+                << " its grains need (their chains and the per-grain work a table saves): "
+                   "the chain runs until each outcome is decided; ";
+            continue;
+        }
+        const PopulationPlan& pp = plan.populations[k.population];
+        why << ": P(develop|N) tabulated for N <= " << pp.table->max_photons() << " (table "
+            << k.table << ": " << pp.table->node_count() << " nodes, "
+            << pp.table->total_runs() << " chain runs, largest node error "
+            << format_g(pp.table->max_standard_error()) << ", interpolation "
+            << format_g(pp.table->max_interpolation_error()) << ")"
+            << (k.capped ? "; brighter grains run the chain" : "");
+        if (pp.curve)
+            why << "; folded into P(develop|mean photons) for means <= "
+                << format_g(pp.curve->lambda_max()) << " (" << pp.curve->node_count()
+                << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
+                << "; radii from tabulated quantiles: relative error of the mean area "
+                << format_g(pp.fast->mean_area_relative_error()) << ")";
+        why << "; ";
+    }
+    if (plan.notes.fog_alone)
+        why << "no light reaches the layer (every exposure value the render reads is 0; NaN and "
+               "negative values expose nothing): its grains develop by fog alone, P = f = "
+            << format_g(c.development.fog_probability())
+            << " each (MODEL.md 4), so only the developed ones are generated, the grain process "
+               "thinned to f (exact in distribution); ";
+    if (const auto& u = plan.notes.unlit_scale)
+        why << "whole scan estimated " << format_g(u->grain_s) << " s grain by grain (the "
+            << "fog's grains), " << format_g(u->pixel_s) << " s at pixel scale (with its "
+            << "model's build): "
+            << (u->grain_s <= u->pixel_s
+                    ? "grain by grain; "
+                    : "the pixel scale where its statistics describe the layer; ");
+    if (const auto& px = plan.notes.pixel_scale) {
+        const PixelModel& pm = *plan.pixel_model;
+        why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
+            << " in " << format_g(px->pitch_um) << " um pixels, " << format_g(px->fog_grains)
+            << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
+               "(interpolation error: mean "
+            << format_g(pm.max_mean_error()) << ", sd " << format_g(pm.max_sd_error())
+            << "), two Gamma laws (covered and open part) weighted by the mean through a "
+               "Gaussian copula with the correlations to "
+            << pm.lags()
+            << " pixels each way (" << format_g(100.0 * pm.max_dropped_correlation())
+            << "% of their sum beyond; its filter on " << filter_lags(pm.lags())
+            << " lags, correlation error " << format_g(pm.max_copula_error()) << ")"
+            << (plan.inhibition ? ", every P thinned by the inhibitors' factor at the pixel's "
+                                  "centre (tabulated to log factor "
+                                      + format_g(px->max_log_factor) + ")"
+                                : "")
+            << "; ";
+    }
+}
+
 }  // namespace
 
 /// Every layer's path and the whole of its reason.
@@ -133,18 +202,19 @@ void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vecto
 {
     for (size_t l = 0; l < out.size(); ++l) {
         LayerPlan& plan = out[l];
-        std::ostringstream path, why;
+        std::ostringstream notes, path, why;
+        describe_notes(c, c.stock.layers[l], plan, notes);
         describe_layer_image(c, l, plan, inhibition, path, why);
         if (plan.pixel_model) {
             // Each pixel's exposure is its input pixel's mean: no photons=.
             path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve");
             plan.path   = path.str();
-            plan.reason = why.str() + plan.reason;
+            plan.reason = why.str() + notes.str();
             continue;
         }
         describe_grain_path(c, plan, path, why);
-        plan.path = path.str();
-        plan.reason += why.str();
+        plan.path   = path.str();
+        plan.reason = notes.str() + why.str();
     }
 }
 

@@ -213,7 +213,7 @@ void request_table(const PlanContext& c, size_t l, size_t p, const PopulationPla
 /// (built or refused by build_tables). Whether light reaches the layer is
 /// read over the region the render reads (read_region), the same for
 /// every tile and, where the stock spreads light or inhibits, for every
-/// ROI. Its reasons go to plan.reason.
+/// ROI. Its reasons go to plan.notes.
 Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableRequests& tables)
 {
     const Layer& layer = c.stock.layers[l];
@@ -234,7 +234,6 @@ Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableReq
             pp.kinetics = KineticsMethod::fog;
         return {};
     }
-    std::ostringstream why;
     for (size_t p = 0; p < plan.populations.size(); ++p) {
         PopulationPlan& pp    = plan.populations[p];
         const Population& pop = layer.populations[p];
@@ -248,16 +247,16 @@ Status choose_kinetics(const PlanContext& c, size_t l, LayerPlan& plan, TableReq
             want = KineticsMethod::table;
         if (want == KineticsMethod::table && pop.rate_area_exponent != 0.0) {
             want = KineticsMethod::early_stop;
-            why << "population " << p
-                << ": rate_area_exponent != 0 makes P(develop|N) depend on grain size, "
-                   "so no table: the chain runs until each outcome is decided; ";
+            PlanNotes::Kinetics note;
+            note.kind       = PlanNotes::Kinetics::Kind::size_dependent;
+            note.population = p;
+            plan.notes.kinetics.push_back(note);
         }
         pp.kinetics = want;
         if (want == KineticsMethod::table)
             request_table(c, l, p, pp, n_mean_area, values.max, plan.exposure.max_value(),
                           tables);
     }
-    plan.reason = why.str();
     return {};
 }
 
@@ -331,13 +330,11 @@ std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tab
         if (!rq.table || !rq.table->complete()
             || (rq.options.step_budget && rq.table->total_steps() > rq.options.step_budget)) {
             pp.kinetics = KineticsMethod::early_stop;
-            std::ostringstream why;
-            why << "population " << need.population
-                << ": a table of P(develop|N) would cost more chain steps than the ~"
-                << format_g(rq.grain_steps)
-                << " its grains need (their chains and the per-grain work a table saves): "
-                   "the chain runs until each outcome is decided; ";
-            plan.reason += why.str();
+            PlanNotes::Kinetics note;
+            note.kind        = PlanNotes::Kinetics::Kind::table_refused;
+            note.population  = need.population;
+            note.grain_steps = rq.grain_steps;
+            plan.notes.kinetics.push_back(note);
             continue;
         }
         pp.table = rq.table;
@@ -373,21 +370,12 @@ std::vector<double> attach_tables(const PlanContext& c, const TableRequests& tab
             plan.error_estimate += curve_bound;
             kinetics_bound[need.layer] += curve_bound;
         }
-        std::ostringstream why;
-        why << "population " << need.population << ": P(develop|N) tabulated for N <= "
-            << pp.table->max_photons() << " (table " << need.request << ": "
-            << pp.table->node_count() << " nodes, " << pp.table->total_runs()
-            << " chain runs, largest node error " << format_g(pp.table->max_standard_error())
-            << ", interpolation " << format_g(pp.table->max_interpolation_error()) << ")"
-            << (need.capped ? "; brighter grains run the chain" : "");
-        if (pp.curve)
-            why << "; folded into P(develop|mean photons) for means <= "
-                << format_g(pp.curve->lambda_max()) << " (" << pp.curve->node_count()
-                << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
-                << "; radii from tabulated quantiles: relative error of the mean area "
-                << format_g(pp.fast->mean_area_relative_error()) << ")";
-        why << "; ";
-        plan.reason += why.str();
+        PlanNotes::Kinetics note;
+        note.kind       = PlanNotes::Kinetics::Kind::table;
+        note.population = need.population;
+        note.table      = need.request;
+        note.capped     = need.capped;
+        plan.notes.kinetics.push_back(note);
     }
     // Each table's bound over its readers in a layer. The region's
     // estimate (--stats) is over a part of the bound's range, so capped by
