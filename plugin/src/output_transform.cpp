@@ -3,12 +3,12 @@
 #include "error_text.h"
 
 #include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/strutil.h>
 
 #include <algorithm>
 #include <cmath>
 #include <exception>
 #include <memory>
-#include <sstream>
 
 #include "filmgrain/ocio.h"
 
@@ -25,13 +25,8 @@ AdxEncoding adx_encoding(OutputKind kind)
 
 namespace {
 
-std::string format_g(double v)
-{
-    std::ostringstream o;
-    o.precision(6);
-    o << v;
-    return o.str();
-}
+/// A number in messages and metadata: printf's %g (6 significant digits).
+std::string format_g(double v) { return OIIO::Strutil::sprintf("%g", v); }
 
 /// The density image as a local packed float buffer (a copy when it is not
 /// one already).

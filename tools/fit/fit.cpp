@@ -13,6 +13,8 @@
 #include "expect/expected_curve_model.h"
 #include "analysis.h"
 #include "granularity.h"
+#include "model/exposure.h"
+#include "model/image_formation.h"
 #include "util/parallel.h"
 #include "patch.h"
 #include "strip.h"
@@ -24,8 +26,6 @@ namespace sm = filmgrain::sensitometry;
 
 namespace {
 
-constexpr double kStopsPerDecade = 3.3219280948873623;
-constexpr double kLog10E         = 0.43429448190325176;
 /// What an objective returns for a candidate that cannot be measured (its
 /// curve never reaches a target density): far above any measurable one,
 /// and growing with the density it lacks, so that a search that starts or

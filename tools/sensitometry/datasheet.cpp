@@ -16,6 +16,8 @@
 #include "expect/boolean_model.h"
 #include "expect/expected_curve_model.h"
 #include "model/inhibition.h"
+#include "model/image_formation.h"
+#include "model/exposure.h"
 
 namespace filmgrain::sensitometry {
 
@@ -236,10 +238,6 @@ Status parse(const Json& j, Datasheet& d)
     return {};
 }
 
-
-/// log2(10): stops per decade.
-constexpr double kStopsPerDecade = 3.3219280948873623;
-constexpr double kLog10E         = 0.43429448190325176;
 
 /// The curve of every stock layer at `shutter_s` on a uniform neutral patch
 /// (MODEL.md 10's inhibition included), with its LayerModel and the curves

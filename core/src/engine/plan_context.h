@@ -15,13 +15,11 @@
 #include <vector>
 
 #include "engine/engine_plan.h"
+#include "model/image_formation.h"
 #include "model/inhibition.h"
 #include "util/parallel.h"
 
 namespace filmgrain::planning {
-
-/// log10(e): Nutting's factor, D = 0.434 n a.
-constexpr double kLog10E = 0.43429448190325176;
 
 /// How auto shares its density error budget (tolerance): the tables (and
 /// the curves folded from them) are built for three quarters; raster

@@ -5,6 +5,7 @@
 // at each size quantile).
 #include "filmgrain/expected_curve.h"
 #include "expect/expected_curve_model.h"
+#include "model/image_formation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,8 +26,6 @@ namespace filmgrain {
 
 namespace {
 
-/// log10(e): D = 0.434 K for a Boolean model of coverage exponent K.
-constexpr double kLog10E = 0.43429448190325176;
 /// The points of a curve: v = 0, then kPerOctave per octave from
 /// 2^-kOctavesBelow to 2^kOctavesAbove times grey (the pixel model's
 /// range and spacing).

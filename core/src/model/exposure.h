@@ -17,6 +17,10 @@ namespace filmgrain {
 /// Incident photons per square micrometre per lux-second at 555 nm.
 inline constexpr double kPhotonsPerUm2PerLxs = 4.09e3;
 
+/// log2(10): stops per decade of exposure (exposure= is in stops, log H in
+/// decades).
+inline constexpr double kStopsPerDecade = 3.3219280948873623;
+
 /// Exposure per unit of scene-linear value, lux-seconds:
 /// H = v / 0.18 * exposure_at_grey_lxs * 2^stops.
 double exposure_lxs_per_unit_value(double exposure_at_grey_lxs, double exposure_stops);

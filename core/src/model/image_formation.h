@@ -62,6 +62,12 @@ template<typename It, typename F> inline void for_each_union_interval(It first, 
     f(a, b);
 }
 
+/// log10(e): D = -log10 T = -kLog10E ln T (MODEL.md 5), so a relative
+/// change dT/T of transmittance moves density by -kLog10E dT/T, and a
+/// layer of n grains per um^2 of mean area a, each developing with
+/// probability P, has density kLog10E n a P in the Boolean model's limit.
+inline constexpr double kLog10E = 0.43429448190325176;
+
 /// Negative density from transmittance: D = -log10(max(T, 10^-max_density))
 /// + base_density (MODEL.md 5). The clamp is part of the model.
 double density_from_transmittance(double transmittance, double max_density,
