@@ -8,9 +8,11 @@
 // render-based check of the same figures is docs/stocks/*/render_check.md).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
+#include "expect/expected_curve_model.h"
 #include "model/dye.h"
 #include "fit.h"
 #include "filmgrain/render.h"
@@ -470,6 +472,48 @@ TEST(Fitter, SaysWhatTheModelCannotReach)
         if (c.figure.find("slope") != std::string::npos)
             slope_missed = !c.met();
     EXPECT_TRUE(slope_missed);
+}
+
+TEST(Fitter, AGranularityDensityTheCurveNeverReachesIsMissedNotAnError)
+{
+    // Tri-X against its datasheet with one more granularity target at a
+    // gross density of 6, above the stock's max_density (4, the clamp of
+    // MODEL.md 5): the measurement still succeeds (a fit then writes its
+    // stock and reports the figure), the figure is NaN, missed, and said
+    // so in the table; every other figure is measured as without it.
+    Stock stock;
+    ASSERT_TRUE(load_stock("tri-x-400", stock));
+    sm::Datasheet sheet = datasheet("kodak-tri-x-400.json");
+    sm::DatasheetFigures before, after;
+    std::vector<sm::Comparison> was, is;
+    ASSERT_TRUE(fit::measure(stock, sheet, ExpectedCurveOptions(), before, was));
+    sheet.layers.at(0).granularity.push_back({ 6.0, false, 20.0 });
+    const Status s = fit::measure(stock, sheet, ExpectedCurveOptions(), after, is);
+    ASSERT_TRUE(s) << s.message();
+    ASSERT_EQ(is.size(), was.size() + 1);
+    size_t unreached = 0;
+    for (const sm::Comparison& c : is) {
+        if (!std::isnan(c.achieved))
+            continue;
+        ++unreached;
+        EXPECT_NE(c.figure.find("RMS at gross 6"), std::string::npos) << c.figure;
+        EXPECT_FALSE(c.met());
+    }
+    EXPECT_EQ(unreached, 1u);
+    for (const sm::Comparison& c : was) {
+        const auto same = std::find_if(is.begin(), is.end(), [&](const sm::Comparison& d) {
+            return d.figure == c.figure;
+        });
+        ASSERT_NE(same, is.end()) << c.figure;
+        EXPECT_EQ(same->achieved, c.achieved) << c.figure;
+    }
+    EXPECT_NE(fit::comparison_table(is).find("| never reached |"), std::string::npos);
+    // A search's measurement keeps the error (its objective costs the
+    // shortfall instead).
+    DevelopModels models(stock, ExpectedCurveOptions());
+    sm::FigureOptions strict;
+    sm::DatasheetFigures f;
+    EXPECT_FALSE(sm::measure_datasheet_figures(stock, sheet, models, strict, f));
 }
 
 TEST(Fitter, NamesTheGranularityNoStockCanReach)

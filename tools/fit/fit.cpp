@@ -634,7 +634,8 @@ Status measure(const Stock& stock, const sm::Datasheet& sheet, const ExpectedCur
 {
     DevelopModels models(stock, curve);
     sm::FigureOptions fo;
-    fo.curve = curve;
+    fo.curve              = curve;
+    fo.unreached_is_error = false;  // reported as missed (the stock is still written)
     if (Status s = sm::measure_datasheet_figures(stock, sheet, models, fo, figures); !s)
         return s;
     comparisons = sm::compare_figures(sheet, figures);
@@ -851,7 +852,8 @@ std::string comparison_table(const std::vector<sm::Comparison>& comparisons)
          "| --- | --- | --- | --- | --- | --- | --- |\n";
     for (const sm::Comparison& c : comparisons) {
         const bool rel = c.unit == "relative";
-        o << "| " << c.figure << " | " << format(c.target) << " | " << format(c.achieved) << " | "
+        o << "| " << c.figure << " | " << format(c.target) << " | "
+          << (std::isnan(c.achieved) ? std::string("never reached") : format(c.achieved)) << " | "
           << format(c.error, 2) << " | "
           << (rel ? format(100.0 * c.miss, 3) + "%" : format(c.miss, 3) + " " + c.unit) << " | "
           << (rel ? format(100.0 * c.tolerance, 3) + "%" : format(c.tolerance, 3) + " " + c.unit)

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -473,9 +474,13 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
             for (const GranularityTarget& g : t.granularity) {
                 const double density = g.net ? c.min_density() + g.density : g.density;
                 Figure rms;
-                if (!rms_granularity_at(stock, ref, l, density, options.granularity_bounds, rms))
-                    return Status::errorf("layer ", t.name, ": density ", density,
-                                          " (granularity target) is never reached");
+                if (!rms_granularity_at(stock, ref, l, density, options.granularity_bounds, rms)) {
+                    if (options.unreached_is_error)
+                        return Status::errorf("layer ", t.name, ": density ", density,
+                                              " (granularity target) is never reached");
+                    rms = { std::numeric_limits<double>::quiet_NaN(),
+                            std::numeric_limits<double>::quiet_NaN() };
+                }
                 f.granularity.push_back(rms);
             }
         out.layers.push_back(std::move(f));
@@ -604,10 +609,12 @@ std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetF
         }
         for (size_t g = 0; g < t.granularity.size() && g < f.granularity.size(); ++g) {
             const GranularityTarget& gt = t.granularity[g];
+            const double achieved = f.granularity[g].value;
             out.push_back({ t.name + " RMS at " + (gt.net ? "net " : "gross ") + fmt(gt.density),
-                            gt.rms, f.granularity[g].value, f.granularity[g].error,
-                            std::fabs(f.granularity[g].value / gt.rms - 1.0), tol.granularity_rel,
-                            "relative" });
+                            gt.rms, achieved, f.granularity[g].error,
+                            std::isnan(achieved) ? std::numeric_limits<double>::infinity()
+                                                 : std::fabs(achieved / gt.rms - 1.0),
+                            tol.granularity_rel, "relative" });
         }
         for (size_t k = 0; k < t.curve.size() && k < f.curve.size(); ++k)
             out.push_back({ t.name + " D at log H " + fmt(t.curve[k].first), t.curve[k].second,

@@ -142,13 +142,19 @@ struct FigureOptions {
     /// populations evaluates its granularity once more for it; a search
     /// that reads only the values may leave them 0).
     bool granularity_bounds = true;
+    /// A granularity target at a density the curve never reaches: an
+    /// error (a search's objective then costs the shortfall instead,
+    /// density_shortfall), or, for a final measurement, a figure of value
+    /// NaN that compare_figures reports as missed.
+    bool unreached_is_error = true;
 };
 
 /// Measures `stock` against `sheet`'s targets analytically. `models` must
 /// be made for this stock's development (DevelopModels(stock, ...)); its
 /// tables are reused across calls with the same rates and shutters.
 /// Errors: a datasheet layer the stock does not have; a target density the
-/// curve never reaches.
+/// curve never reaches (for a granularity target, only with
+/// options.unreached_is_error).
 Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                  DevelopModels& models, const FigureOptions& options,
                                  DatasheetFigures& out);
@@ -201,7 +207,8 @@ struct Tolerances {
 struct Comparison {
     std::string figure;  ///< e.g. "speed", "Y slope", "Y rms@net1.0", "reciprocity 10 s"
     double target = 0.0, achieved = 0.0, error = 0.0;
-    double miss = 0.0;       ///< |achieved - target| in the tolerance's unit
+    double miss = 0.0;       ///< |achieved - target| in the tolerance's unit; +inf
+                             ///< where the stock never reaches the figure (NaN)
     double tolerance = 0.0;  ///< in the same unit
     std::string unit;        ///< "stops", "density", "relative", ...
     bool met() const { return miss <= tolerance; }
