@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <unistd.h>
 
 #include "model/dye.h"
 #include "util/parse_number.h"
@@ -236,17 +238,18 @@ nlohmann::json figures_json(const sm::DatasheetFigures& f,
     return j;
 }
 
-}  // namespace
-
-int main(int argc, char** argv)
-{
-    // A fit builds P(develop | N) tables for thousands of trial stocks, each
-    // used once: none is kept on disk (kinetics_table.h), unless the caller
-    // names a cache directory.
-    setenv("FILMGRAIN_CACHE_DIR", "off", /*overwrite=*/0);
+/// What the command line asks for.
+struct FitCommand {
     filmgrain::fit::FitOptions opt;
     std::string sheet_path, out_path, report_dir, measure_path, start_path, name;
     bool quiet = false, check = false;
+};
+
+/// Parses argv into `cmd`: nothing, or the exit status (0 after --help, 2
+/// on a usage error, said on stderr).
+std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
+{
+    filmgrain::fit::FitOptions& opt = cmd.opt;
     std::map<std::string, double> scatter, halation;
     std::optional<double> scatter_sigma_um, halation_radius_um;
     std::optional<filmgrain::HalationKernel> halation_kernel;
@@ -284,6 +287,19 @@ int main(int argc, char** argv)
             }
             return x;
         };
+        // One of `names` (the option's words); exits 2 on another.
+        const auto choice = [&](std::initializer_list<const char*> names) -> std::string {
+            std::string list;  // "a, b or c"
+            size_t k = 0;
+            for (const char* n : names)
+                list += (k++ == 0 ? "" : k == names.size() ? " or " : ", ") + std::string(n);
+            const std::string v = next(list.c_str());
+            for (const char* n : names)
+                if (v == n)
+                    return v;
+            std::cerr << "filmgrain-fit: " << a << " " << v << ": must be " << list << "\n";
+            std::exit(2);
+        };
         // LAYER=FRACTION,... (--scatter, --halation): fractions in [0, 1].
         const auto per_layer = [&](std::map<std::string, double>& out) {
             const std::string v = next("LAYER=FRACTION,...");
@@ -305,11 +321,11 @@ int main(int argc, char** argv)
             usage(std::cout);
             return 0;
         } else if (a == "-o") {
-            out_path = next("a file");
+            cmd.out_path = next("a file");
         } else if (a == "--report") {
-            report_dir = next("a directory");
+            cmd.report_dir = next("a directory");
         } else if (a == "--measure") {
-            measure_path = next("a stock");
+            cmd.measure_path = next("a stock");
         } else if (a == "--seed") {
             const std::string v = next("a number");
             uint64_t seed       = 0;
@@ -330,25 +346,16 @@ int main(int argc, char** argv)
         } else if (a == "--rounds") {
             opt.rounds = static_cast<int>(integer("N", 1, 8));
         } else if (a == "--render-check") {
-            check = true;
+            cmd.check = true;
         } else if (a == "--no-rates") {
             opt.fit_rates = false;
         } else if (a == "--image") {
-            const std::string v = next("silver or dye");
-            if (v != "silver" && v != "dye") {
-                std::cerr << "filmgrain-fit: --image " << v << ": must be silver or dye\n";
-                return 2;
-            }
-            opt.image = v == "dye" ? filmgrain::LayerImage::dye : filmgrain::LayerImage::silver;
+            opt.image = choice({ "silver", "dye" }) == "dye" ? filmgrain::LayerImage::dye
+                                                             : filmgrain::LayerImage::silver;
         } else if (a == "--cloud-profile") {
-            const std::string v = next("disc or gaussian");
-            if (v != "disc" && v != "gaussian") {
-                std::cerr << "filmgrain-fit: --cloud-profile " << v
-                          << ": must be disc or gaussian\n";
-                return 2;
-            }
-            opt.cloud_profile = v == "disc" ? filmgrain::CloudProfile::disc
-                                            : filmgrain::CloudProfile::gaussian;
+            opt.cloud_profile = choice({ "disc", "gaussian" }) == "disc"
+                                    ? filmgrain::CloudProfile::disc
+                                    : filmgrain::CloudProfile::gaussian;
         } else if (a == "--coupler-limited") {
             opt.coupler_limited = static_cast<int>(integer("N", 0, 4));
         } else if (a == "--start-cloud-ratio") {
@@ -364,12 +371,7 @@ int main(int argc, char** argv)
         } else if (a == "--halation-radius-um") {
             halation_radius_um = number("micrometres", 0.0, 5000.0);
         } else if (a == "--halation-kernel") {
-            const std::string v = next("disc, ring or base");
-            if (v != "disc" && v != "ring" && v != "base") {
-                std::cerr << "filmgrain-fit: --halation-kernel " << v
-                          << ": must be disc, ring or base\n";
-                return 2;
-            }
+            const std::string v = choice({ "disc", "ring", "base" });
             halation_kernel = v == "disc"   ? filmgrain::HalationKernel::disc
                               : v == "ring" ? filmgrain::HalationKernel::ring
                                             : filmgrain::HalationKernel::base;
@@ -378,34 +380,30 @@ int main(int argc, char** argv)
         } else if (a == "--base-refractive-index") {
             base_refractive_index = number("a number", 1.3, 2.0);
         } else if (a == "--rear-face") {
-            const std::string v = next("remjet or bare");
-            if (v != "remjet" && v != "bare") {
-                std::cerr << "filmgrain-fit: --rear-face " << v << ": must be remjet or bare\n";
-                return 2;
-            }
-            rear_face = v == "remjet" ? filmgrain::RearFace::remjet : filmgrain::RearFace::bare;
+            rear_face = choice({ "remjet", "bare" }) == "remjet" ? filmgrain::RearFace::remjet
+                                                                 : filmgrain::RearFace::bare;
         } else if (a == "--inhibition") {
             opt.inhibition = true;
         } else if (a == "--no-inhibition") {
             opt.inhibition = false;
         } else if (a == "--start") {
-            start_path = next("a stock");
+            cmd.start_path = next("a stock");
         } else if (a == "--layers") {
             opt.layers = split_commas(a, next("layer names"));
         } else if (a == "--name") {
-            name = next("a name");
+            cmd.name = next("a name");
         } else if (a == "--threads") {
             const int t = static_cast<int>(integer("N", 0, 1024));
             opt.search_curve.nthreads = opt.rate_curve.nthreads = opt.final_curve.nthreads = t;
         } else if (a == "-q") {
-            quiet = true;
+            cmd.quiet = true;
         } else if (!a.empty() && a[0] == '-') {
             std::cerr << "filmgrain-fit: unknown option " << a << " (see --help)\n";
             return 2;
-        } else if (sheet_path.empty()) {
-            sheet_path = a;
+        } else if (cmd.sheet_path.empty()) {
+            cmd.sheet_path = a;
         } else {
-            std::cerr << "filmgrain-fit: more than one datasheet (" << sheet_path << ", " << a
+            std::cerr << "filmgrain-fit: more than one datasheet (" << cmd.sheet_path << ", " << a
                       << ")\n";
             return 2;
         }
@@ -453,79 +451,93 @@ int main(int argc, char** argv)
                 ls.halation_kernel    = halation_kernel.value_or(filmgrain::HalationKernel::disc);
             }
         }
-    if (!opt.light_spread.empty() && !measure_path.empty()) {
+    if (!opt.light_spread.empty() && !cmd.measure_path.empty()) {
         std::cerr << "filmgrain-fit: --scatter and --halation set a fitted stock's spread; "
                      "--measure measures a stock as it is\n";
         return 2;
     }
-    if (sheet_path.empty() || (out_path.empty() && measure_path.empty())) {
+    if (cmd.sheet_path.empty() || (cmd.out_path.empty() && cmd.measure_path.empty())) {
         usage(std::cerr);
         return 2;
     }
-    sm::Datasheet sheet;
-    if (Status s = sm::load_datasheet(sheet_path, sheet); !s) {
-        std::cerr << "filmgrain-fit: " << s.message() << "\n";
-        return 1;
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    const auto elapsed = [&] {
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    };
-    if (!quiet)
-        opt.progress = [&](const std::string& line) {
-            std::cerr << stamp(elapsed()) << line << std::endl;
-        };
+    return std::nullopt;
+}
 
+/// Writes `text` to `path` all or nothing: a temporary file beside it,
+/// renamed over it once complete.
+Status write_file_atomically(const std::string& path, const std::string& text)
+{
+    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+    {
+        std::ofstream out(tmp);
+        out << text;
+        out.close();
+        if (!out) {
+            std::error_code ec;
+            std::filesystem::remove(tmp, ec);
+            return Status::errorf("cannot write ", path);
+        }
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) {
+        std::filesystem::remove(tmp, ec);
+        return Status::errorf("cannot write ", path, ": ", ec.message());
+    }
+    return {};
+}
+
+/// What a fit or a measurement found.
+struct Outcome {
     Stock stock;
     sm::DatasheetFigures figures;
     std::vector<sm::Comparison> comparisons;
     double fit_seconds = 0.0;
     int evaluations    = 0;
-    if (!measure_path.empty()) {
-        if (Status s = filmgrain::load_stock(measure_path, stock); !s) {
-            std::cerr << "filmgrain-fit: " << s.message() << "\n";
-            return 1;
-        }
-        if (Status s = filmgrain::fit::measure(stock, sheet, opt.final_curve, figures, comparisons);
-            !s) {
-            std::cerr << "filmgrain-fit: " << s.message() << "\n";
-            return 1;
-        }
-    } else {
-        if (!start_path.empty()) {
-            Stock start;
-            if (Status s = filmgrain::load_stock(start_path, start); !s) {
-                std::cerr << "filmgrain-fit: " << s.message() << "\n";
-                return 1;
-            }
-            opt.start = start;
-        }
-        if (opt.progress)
-            opt.progress("fitting " + sheet.name + " (" + sheet_path + "), seed "
-                         + std::to_string(opt.seed));
-        filmgrain::fit::FitResult r;
-        if (Status s = filmgrain::fit::fit_stock(sheet, opt, r); !s) {
-            std::cerr << "filmgrain-fit: " << s.message() << "\n";
-            return 1;
-        }
-        stock       = r.stock;
-        figures     = r.figures;
-        comparisons = r.comparisons;
-        fit_seconds = r.seconds;
-        evaluations = r.evaluations;
-        if (!name.empty())
-            stock.name = name;
-        std::ofstream out(out_path);
-        out << filmgrain::stock_to_json(stock, 2) << "\n";
-        if (!out) {
-            std::cerr << "filmgrain-fit: cannot write " << out_path << "\n";
-            return 1;
-        }
+};
+
+/// Measures --measure's stock, or fits one and writes it to -o.
+Status fit_or_measure(const FitCommand& cmd, const sm::Datasheet& sheet, Outcome& out)
+{
+    if (!cmd.measure_path.empty()) {
+        if (Status s = filmgrain::load_stock(cmd.measure_path, out.stock); !s)
+            return s;
+        return filmgrain::fit::measure(out.stock, sheet, cmd.opt.final_curve, out.figures,
+                                       out.comparisons);
     }
-    const std::string table = filmgrain::fit::comparison_table(comparisons);
-    int missed              = 0;
-    for (const auto& c : comparisons)
-        missed += c.met() ? 0 : 1;
+    filmgrain::fit::FitOptions opt = cmd.opt;
+    if (!cmd.start_path.empty()) {
+        Stock start;
+        if (Status s = filmgrain::load_stock(cmd.start_path, start); !s)
+            return s;
+        opt.start = start;
+    }
+    if (opt.progress)
+        opt.progress("fitting " + sheet.name + " (" + cmd.sheet_path + "), seed "
+                     + std::to_string(opt.seed));
+    filmgrain::fit::FitResult r;
+    if (Status s = filmgrain::fit::fit_stock(sheet, opt, r); !s)
+        return s;
+    out.stock       = r.stock;
+    out.figures     = r.figures;
+    out.comparisons = r.comparisons;
+    out.fit_seconds = r.seconds;
+    out.evaluations = r.evaluations;
+    if (!cmd.name.empty())
+        out.stock.name = cmd.name;
+    return write_file_atomically(cmd.out_path, filmgrain::stock_to_json(out.stock, 2) + "\n");
+}
+
+/// What the model cannot reach for this datasheet: model_limits's bounds,
+/// which hold for images that add (silver, MODEL.md 8's clouds); a
+/// coupler-limited population's noise falls as its clouds fill the plane,
+/// which they do not bound.
+std::vector<std::string> limits_of(const FitCommand& cmd, const sm::Datasheet& sheet,
+                                   const Stock& stock)
+{
+    for (const filmgrain::Layer& l : stock.layers)
+        if (filmgrain::has_coupler_limit(l))
+            return {};
     // The grains each datasheet layer may hold: the search's bound for a fit
     // (every population at its most), the stock's own for a measurement.
     std::vector<double> layer_grains_per_um2;
@@ -534,109 +546,151 @@ int main(int argc, char** argv)
         for (const filmgrain::Layer& l : stock.layers)
             if (l.name == t.name)
                 for (const filmgrain::Population& p : l.populations)
-                    sum += measure_path.empty() ? filmgrain::fit::kMaxGrainsPerPopulationPerUm2
-                                                : p.grains_per_um2;
+                    sum += cmd.measure_path.empty()
+                               ? filmgrain::fit::kMaxGrainsPerPopulationPerUm2
+                               : p.grains_per_um2;
         layer_grains_per_um2.push_back(sum);
     }
-    // model_limits's bounds hold for images that add (silver, MODEL.md 8's
-    // clouds): a coupler-limited population's noise falls as its clouds
-    // fill the plane, which they do not bound.
-    bool coupler_limited = false;
-    for (const filmgrain::Layer& l : stock.layers)
-        coupler_limited = coupler_limited || filmgrain::has_coupler_limit(l);
-    const std::vector<std::string> limits
-        = coupler_limited
-              ? std::vector<std::string>()
-              : filmgrain::fit::model_limits(sheet, stock.inhibits(), layer_grains_per_um2);
+    return filmgrain::fit::model_limits(sheet, stock.inhibits(), layer_grains_per_um2);
+}
+
+/// --report DIR: report.md, figures.json, curves.csv, granularity.csv.
+void write_report(const FitCommand& cmd, const sm::Datasheet& sheet, const Outcome& o,
+                  const std::string& table, int missed, const std::vector<std::string>& limits)
+{
+    const std::string& dir = cmd.report_dir;
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    std::ofstream md(dir + "/report.md");
+    md << "# " << o.stock.name << " against the datasheet " << sheet.name << "\n\n"
+       << "Datasheet: `" << cmd.sheet_path << "`. Figures measured analytically from the model's "
+          "expected curves and Boolean-model aperture variance "
+          "(tools/sensitometry/datasheet.h says how each is defined); the error bound is "
+          "the expected curve's stated density error carried into each figure.\n\n";
+    if (cmd.measure_path.empty())
+        md << "Fitted in " << o.fit_seconds << " s (" << o.evaluations
+           << " objective evaluations), seed " << cmd.opt.seed << ", " << cmd.opt.populations
+           << " populations per layer.\n\n";
+    md << table << "\n"
+       << (missed ? "**" + std::to_string(missed) + " figures missed** (above).\n"
+                  : "Every figure is within the issue's tolerance.\n");
+    if (!limits.empty()) {
+        md << "\n## What the model cannot reach\n\n";
+        for (const std::string& l : limits)
+            md << "- " << l << ".\n";
+    }
+    nlohmann::json j = figures_json(o.figures, o.comparisons);
+    j["stock"]       = nlohmann::json::parse(filmgrain::stock_to_json(o.stock));
+    j["fit_seconds"] = o.fit_seconds;
+    std::ofstream(dir + "/figures.json") << j.dump(2) << "\n";
+    if (Status s = write_curves(o.stock, sheet, cmd.opt.final_curve, dir + "/curves.csv"); !s)
+        std::cerr << "filmgrain-fit: " << s.message() << "\n";
+    if (Status s = write_granularity(o.stock, sheet, cmd.opt.final_curve,
+                                     dir + "/granularity.csv");
+        !s)
+        std::cerr << "filmgrain-fit: " << s.message() << "\n";
+}
+
+/// --render-check: renders the patches of every analytic figure and
+/// compares; 0 when every row agrees, else 1.
+int render_check(const FitCommand& cmd, const sm::Datasheet& sheet, const Outcome& o)
+{
+    const Stock& stock = o.stock;
+    std::vector<filmgrain::fit::RenderCheckRow> rows;
+    if (Status s = filmgrain::fit::render_check(stock, sheet, o.figures, cmd.opt.seed,
+                                                cmd.opt.final_curve.nthreads, cmd.opt.progress,
+                                                rows);
+        !s) {
+        std::cerr << "filmgrain-fit: render check: " << s.message() << "\n";
+        return 1;
+    }
+    std::ostringstream md;
+    md << "| figure | analytic | bound | rendered (exact engine) | standard error | z | |\n"
+          "| --- | --- | --- | --- | --- | --- | --- |\n";
+    int disagree = 0;
+    for (const auto& r : rows) {
+        disagree += r.agrees() ? 0 : 1;
+        md << "| " << r.figure << " | " << r.analytic << " | " << r.analytic_error << " | "
+           << r.rendered << " | " << r.rendered_se << " | "
+           << (r.rendered_se > 0.0 ? (r.rendered - r.analytic) / r.rendered_se : 0.0) << " | "
+           << (r.agrees() ? "agrees" : "**disagrees**") << " |\n";
+    }
+    md << (disagree ? std::to_string(disagree) + " rows disagree (beyond 3 standard errors "
+                                                 "plus the analytic bound)\n"
+                    : "every row agrees within 3 standard errors plus the analytic bound\n");
+    std::cout << "\nrender check:\n" << md.str();
+    // Which layers were rendered alone (render_check): say so.
+    std::string alone, together;
+    for (size_t l = 0; l < stock.layers.size(); ++l)
+        (filmgrain::fit::layer_develops_alone(stock, l) ? alone : together)
+            += (std::string(1, ' ') + stock.layers[l].name);
+    std::string layers;
+    if (stock.layers.size() > 1) {
+        layers = " Each layer's patches render";
+        if (!alone.empty())
+            layers += " the layer alone where no other layer inhibits it (every effect "
+                      "but MODEL.md 10's inhibition acts within a layer):" + alone;
+        if (!together.empty())
+            layers += std::string(alone.empty() ? "" : ";") + " the whole stock where "
+                      "another layer inhibits it:" + together;
+        layers += ".";
+    }
+    if (!cmd.report_dir.empty())
+        std::ofstream(cmd.report_dir + "/render_check.md")
+            << "# Render check: " << stock.name << "\n\nThe analytic figures beside "
+               "patches rendered with the exact engine and read by tools/sensitometry "
+               "(expose_patch, read_granularity), seed " << cmd.opt.seed << "." << layers
+            << " Agreement: |rendered - analytic| <= 3 standard errors + the analytic "
+               "bound.\n\n"
+            << md.str();
+    return disagree ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    // A fit builds P(develop | N) tables for thousands of trial stocks, each
+    // used once: none is kept on disk (kinetics_table.h), unless the caller
+    // names a cache directory.
+    setenv("FILMGRAIN_CACHE_DIR", "off", /*overwrite=*/0);
+    FitCommand cmd;
+    if (const std::optional<int> exit_status = parse_command_line(argc, argv, cmd))
+        return *exit_status;
+    sm::Datasheet sheet;
+    if (Status s = sm::load_datasheet(cmd.sheet_path, sheet); !s) {
+        std::cerr << "filmgrain-fit: " << s.message() << "\n";
+        return 1;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!cmd.quiet)
+        cmd.opt.progress = [t0](const std::string& line) {
+            std::cerr << stamp(std::chrono::duration<double>(std::chrono::steady_clock::now()
+                                                             - t0)
+                                   .count())
+                      << line << std::endl;
+        };
+    Outcome o;
+    if (Status s = fit_or_measure(cmd, sheet, o); !s) {
+        std::cerr << "filmgrain-fit: " << s.message() << "\n";
+        return 1;
+    }
+    const std::string table = filmgrain::fit::comparison_table(o.comparisons);
+    int missed              = 0;
+    for (const auto& c : o.comparisons)
+        missed += c.met() ? 0 : 1;
+    const std::vector<std::string> limits = limits_of(cmd, sheet, o.stock);
     std::cout << table;
     for (const std::string& l : limits)
         std::cout << "model limit: " << l << "\n";
-    std::cout << (missed ? std::to_string(missed) + " of " + std::to_string(comparisons.size())
+    std::cout << (missed ? std::to_string(missed) + " of " + std::to_string(o.comparisons.size())
                                + " figures missed their tolerance"
-                         : "every figure within tolerance (" + std::to_string(comparisons.size())
+                         : "every figure within tolerance (" + std::to_string(o.comparisons.size())
                                + ")")
               << "\n";
-    if (!report_dir.empty()) {
-        std::error_code ec;
-        std::filesystem::create_directories(report_dir, ec);
-        std::ofstream md(report_dir + "/report.md");
-        md << "# " << stock.name << " against the datasheet " << sheet.name << "\n\n"
-           << "Datasheet: `" << sheet_path << "`. Figures measured analytically from the model's "
-              "expected curves and Boolean-model aperture variance "
-              "(tools/sensitometry/datasheet.h says how each is defined); the error bound is "
-              "the expected curve's stated density error carried into each figure.\n\n";
-        if (measure_path.empty())
-            md << "Fitted in " << fit_seconds << " s (" << evaluations
-               << " objective evaluations), seed " << opt.seed << ", " << opt.populations
-               << " populations per layer.\n\n";
-        md << table << "\n"
-           << (missed ? "**" + std::to_string(missed) + " figures missed** (above).\n"
-                      : "Every figure is within the issue's tolerance.\n");
-        if (!limits.empty()) {
-            md << "\n## What the model cannot reach\n\n";
-            for (const std::string& l : limits)
-                md << "- " << l << ".\n";
-        }
-        nlohmann::json j = figures_json(figures, comparisons);
-        j["stock"]       = nlohmann::json::parse(filmgrain::stock_to_json(stock));
-        j["fit_seconds"] = fit_seconds;
-        std::ofstream(report_dir + "/figures.json") << j.dump(2) << "\n";
-        if (Status s = write_curves(stock, sheet, opt.final_curve, report_dir + "/curves.csv"); !s)
-            std::cerr << "filmgrain-fit: " << s.message() << "\n";
-        if (Status s = write_granularity(stock, sheet, opt.final_curve,
-                                         report_dir + "/granularity.csv");
-            !s)
-            std::cerr << "filmgrain-fit: " << s.message() << "\n";
-    }
-    if (check) {
-        std::vector<filmgrain::fit::RenderCheckRow> rows;
-        if (Status s = filmgrain::fit::render_check(stock, sheet, figures, opt.seed,
-                                                    opt.final_curve.nthreads, opt.progress, rows);
-            !s) {
-            std::cerr << "filmgrain-fit: render check: " << s.message() << "\n";
-            return 1;
-        }
-        std::ostringstream md;
-        md << "| figure | analytic | bound | rendered (exact engine) | standard error | z | |\n"
-              "| --- | --- | --- | --- | --- | --- | --- |\n";
-        int disagree = 0;
-        for (const auto& r : rows) {
-            disagree += r.agrees() ? 0 : 1;
-            md << "| " << r.figure << " | " << r.analytic << " | " << r.analytic_error << " | "
-               << r.rendered << " | " << r.rendered_se << " | "
-               << (r.rendered_se > 0.0 ? (r.rendered - r.analytic) / r.rendered_se : 0.0) << " | "
-               << (r.agrees() ? "agrees" : "**disagrees**") << " |\n";
-        }
-        md << (disagree ? std::to_string(disagree) + " rows disagree (beyond 3 standard errors "
-                                                     "plus the analytic bound)\n"
-                        : "every row agrees within 3 standard errors plus the analytic bound\n");
-        std::cout << "\nrender check:\n" << md.str();
-        // Which layers were rendered alone (render_check): say so.
-        std::string alone, together;
-        for (size_t l = 0; l < stock.layers.size(); ++l)
-            (filmgrain::fit::layer_develops_alone(stock, l) ? alone : together)
-                += (std::string(1, ' ') + stock.layers[l].name);
-        std::string layers;
-        if (stock.layers.size() > 1) {
-            layers = " Each layer's patches render";
-            if (!alone.empty())
-                layers += " the layer alone where no other layer inhibits it (every effect "
-                          "but MODEL.md 10's inhibition acts within a layer):" + alone;
-            if (!together.empty())
-                layers += std::string(alone.empty() ? "" : ";") + " the whole stock where "
-                          "another layer inhibits it:" + together;
-            layers += ".";
-        }
-        if (!report_dir.empty())
-            std::ofstream(report_dir + "/render_check.md")
-                << "# Render check: " << stock.name << "\n\nThe analytic figures beside "
-                   "patches rendered with the exact engine and read by tools/sensitometry "
-                   "(expose_patch, read_granularity), seed " << opt.seed << "." << layers
-                << " Agreement: |rendered - analytic| <= 3 standard errors + the analytic "
-                   "bound.\n\n"
-                << md.str();
-        if (disagree)
-            return 1;
-    }
+    if (!cmd.report_dir.empty())
+        write_report(cmd, sheet, o, table, missed, limits);
+    if (cmd.check && render_check(cmd, sheet, o) != 0)
+        return 1;
     return missed ? 3 : 0;
 }
