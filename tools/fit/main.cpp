@@ -487,14 +487,8 @@ Status write_file_atomically(const std::string& path, const std::string& text)
     return {};
 }
 
-/// What a fit or a measurement found.
-struct Outcome {
-    Stock stock;
-    sm::DatasheetFigures figures;
-    std::vector<sm::Comparison> comparisons;
-    double fit_seconds = 0.0;
-    int evaluations    = 0;
-};
+/// What a fit or a measurement found (a measurement: no evaluations, 0 s).
+using Outcome = filmgrain::fit::FitResult;
 
 /// Measures --measure's stock, or fits one and writes it to -o.
 Status fit_or_measure(const FitCommand& cmd, const sm::Datasheet& sheet, Outcome& out)
@@ -515,14 +509,8 @@ Status fit_or_measure(const FitCommand& cmd, const sm::Datasheet& sheet, Outcome
     if (opt.progress)
         opt.progress("fitting " + sheet.name + " (" + cmd.sheet_path + "), seed "
                      + std::to_string(opt.seed));
-    filmgrain::fit::FitResult r;
-    if (Status s = filmgrain::fit::fit_stock(sheet, opt, r); !s)
+    if (Status s = filmgrain::fit::fit_stock(sheet, opt, out); !s)
         return s;
-    out.stock       = r.stock;
-    out.figures     = r.figures;
-    out.comparisons = r.comparisons;
-    out.fit_seconds = r.seconds;
-    out.evaluations = r.evaluations;
     if (!cmd.name.empty())
         out.stock.name = cmd.name;
     return write_file_atomically(cmd.out_path, filmgrain::stock_to_json(out.stock, 2) + "\n");
@@ -568,7 +556,7 @@ void write_report(const FitCommand& cmd, const sm::Datasheet& sheet, const Outco
           "(tools/sensitometry/datasheet.h says how each is defined); the error bound is "
           "the expected curve's stated density error carried into each figure.\n\n";
     if (cmd.measure_path.empty())
-        md << "Fitted in " << o.fit_seconds << " s (" << o.evaluations
+        md << "Fitted in " << o.seconds << " s (" << o.evaluations
            << " objective evaluations), seed " << cmd.opt.seed << ", " << cmd.opt.populations
            << " populations per layer.\n\n";
     md << table << "\n"
@@ -581,7 +569,7 @@ void write_report(const FitCommand& cmd, const sm::Datasheet& sheet, const Outco
     }
     nlohmann::json j = figures_json(o.figures, o.comparisons);
     j["stock"]       = nlohmann::json::parse(filmgrain::stock_to_json(o.stock));
-    j["fit_seconds"] = o.fit_seconds;
+    j["fit_seconds"] = o.seconds;
     std::ofstream(dir + "/figures.json") << j.dump(2) << "\n";
     if (Status s = write_curves(o.stock, sheet, cmd.opt.final_curve, dir + "/curves.csv"); !s)
         std::cerr << "filmgrain-fit: " << s.message() << "\n";
