@@ -516,6 +516,35 @@ TEST(Fitter, AGranularityDensityTheCurveNeverReachesIsMissedNotAnError)
     EXPECT_FALSE(sm::measure_datasheet_figures(stock, sheet, models, strict, f));
 }
 
+TEST(Fitter, ASpeedPointTheCurveNeverReachesIsMissedNotAnError)
+{
+    // Grains that absorb almost nothing: the curve never rises 0.1 above
+    // fog. The speed, the reciprocity measured from it and the granularity
+    // are never reached, and missed; the measurement succeeds.
+    Stock stock;
+    ASSERT_TRUE(load_stock("tri-x-400", stock));
+    for (Population& pop : stock.layers.at(0).populations)
+        pop.quantum_efficiency = 1e-9;
+    const sm::Datasheet sheet = datasheet("kodak-tri-x-400.json");
+    sm::DatasheetFigures figures;
+    std::vector<sm::Comparison> comparisons;
+    const Status s = fit::measure(stock, sheet, ExpectedCurveOptions(), figures, comparisons);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_TRUE(std::isnan(figures.speed.value));
+    for (const sm::Comparison& c : comparisons) {
+        const bool from_speed = c.figure.rfind("speed", 0) == 0
+                                || c.figure.rfind("reciprocity", 0) == 0
+                                || c.figure.find("RMS") != std::string::npos;
+        if (from_speed) {
+            EXPECT_FALSE(c.met()) << c.figure;
+            EXPECT_TRUE(std::isinf(c.miss)) << c.figure << ": " << c.miss;
+        }
+    }
+    DevelopModels models(stock, ExpectedCurveOptions());
+    sm::FigureOptions strict;
+    EXPECT_FALSE(sm::measure_datasheet_figures(stock, sheet, models, strict, figures));
+}
+
 TEST(Fitter, NamesTheGranularityNoStockCanReach)
 {
     // VISION3's granularity falls with density in places; without

@@ -853,7 +853,8 @@ std::string comparison_table(const std::vector<sm::Comparison>& comparisons)
     for (const sm::Comparison& c : comparisons) {
         const bool rel = c.unit == "relative";
         o << "| " << c.figure << " | " << format(c.target) << " | "
-          << (std::isnan(c.achieved) ? std::string("never reached") : format(c.achieved)) << " | "
+          << (std::isfinite(c.achieved) ? format(c.achieved) : std::string("never reached"))
+          << " | "
           << format(c.error, 2) << " | "
           << (rel ? format(100.0 * c.miss, 3) + "%" : format(c.miss, 3) + " " + c.unit) << " | "
           << (rel ? format(100.0 * c.tolerance, 3) + "%" : format(c.tolerance, 3) + " " + c.unit)

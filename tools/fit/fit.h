@@ -175,9 +175,10 @@ Status initial_stock(const sensitometry::Datasheet& sheet, const FitOptions& opt
 /// per-layer base), no layers.
 Status fit_stock(const sensitometry::Datasheet& sheet, const FitOptions& options, FitResult& out);
 
-/// Measures `stock` against `sheet` at `curve` precision. A granularity
-/// target at a density the stock never reaches is a missed comparison
-/// (achieved NaN), not an error: a fit still writes its stock.
+/// Measures `stock` against `sheet` at `curve` precision. A figure at a
+/// density the stock never reaches (a speed point, a granularity target)
+/// is a missed comparison (achieved NaN), not an error: a fit still
+/// writes its stock.
 Status measure(const Stock& stock, const sensitometry::Datasheet& sheet,
                const ExpectedCurveOptions& curve, sensitometry::DatasheetFigures& figures,
                std::vector<sensitometry::Comparison>& comparisons);

@@ -419,10 +419,13 @@ Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
         const ExpectedCurve& c = ref.curves[l];
         const double sens      = stock.layers[l].neutral_weight();
         speed_h[l] = log10_exposure_at_density(c, sens, c.min_density() + crit_net);
-        if (!std::isfinite(speed_h[l]))
-            return Status::errorf("layer ", stock.layers[l].name,
-                                  ": the curve never reaches its speed point (", crit_net,
-                                  " above D-min)");
+        if (!std::isfinite(speed_h[l])) {
+            if (options.unreached_is_error)
+                return Status::errorf("layer ", stock.layers[l].name,
+                                      ": the curve never reaches its speed point (", crit_net,
+                                      " above D-min)");
+            speed_h[l] = std::numeric_limits<double>::quiet_NaN();  // never reached
+        }
         speed_h_err[l] = log10_h_error(c, c.value_at_density(c.min_density() + crit_net));
     }
     if (iso5800) {
@@ -609,11 +612,9 @@ std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetF
         }
         for (size_t g = 0; g < t.granularity.size() && g < f.granularity.size(); ++g) {
             const GranularityTarget& gt = t.granularity[g];
-            const double achieved = f.granularity[g].value;
             out.push_back({ t.name + " RMS at " + (gt.net ? "net " : "gross ") + fmt(gt.density),
-                            gt.rms, achieved, f.granularity[g].error,
-                            std::isnan(achieved) ? std::numeric_limits<double>::infinity()
-                                                 : std::fabs(achieved / gt.rms - 1.0),
+                            gt.rms, f.granularity[g].value, f.granularity[g].error,
+                            std::fabs(f.granularity[g].value / gt.rms - 1.0),
                             tol.granularity_rel, "relative" });
         }
         for (size_t k = 0; k < t.curve.size() && k < f.curve.size(); ++k)
@@ -644,6 +645,11 @@ std::vector<Comparison> compare_figures(const Datasheet& sheet, const DatasheetF
         c.unit      = "stops";
         out.push_back(c);
     }
+    // A figure the stock never reaches (measured as NaN) misses by
+    // everything.
+    for (Comparison& c : out)
+        if (std::isnan(c.achieved) || std::isnan(c.miss))
+            c.miss = std::numeric_limits<double>::infinity();
     return out;
 }
 

@@ -142,10 +142,12 @@ struct FigureOptions {
     /// populations evaluates its granularity once more for it; a search
     /// that reads only the values may leave them 0).
     bool granularity_bounds = true;
-    /// A granularity target at a density the curve never reaches: an
-    /// error (a search's objective then costs the shortfall instead,
-    /// density_shortfall), or, for a final measurement, a figure of value
-    /// NaN that compare_figures reports as missed.
+    /// A density the curve never reaches (a layer's speed point, a
+    /// granularity target's): an error (a search's objective then costs
+    /// the shortfall instead, density_shortfall), or, for a final
+    /// measurement, figures of value NaN (the speed, that layer's speed
+    /// point and the reciprocity that starts from it; the granularity)
+    /// that compare_figures reports as missed.
     bool unreached_is_error = true;
 };
 
@@ -153,8 +155,7 @@ struct FigureOptions {
 /// be made for this stock's development (DevelopModels(stock, ...)); its
 /// tables are reused across calls with the same rates and shutters.
 /// Errors: a datasheet layer the stock does not have; a target density the
-/// curve never reaches (for a granularity target, only with
-/// options.unreached_is_error).
+/// curve never reaches (only with options.unreached_is_error).
 Status measure_datasheet_figures(const Stock& stock, const Datasheet& sheet,
                                  DevelopModels& models, const FigureOptions& options,
                                  DatasheetFigures& out);
