@@ -16,10 +16,10 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
-#include <unistd.h>
 
 #include "model/dye.h"
 #include "util/parse_number.h"
+#include "util/whole_file.h"
 #include "fit.h"
 
 namespace sm = filmgrain::sensitometry;
@@ -463,30 +463,6 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
     return std::nullopt;
 }
 
-/// Writes `text` to `path` all or nothing: a temporary file beside it,
-/// renamed over it once complete.
-Status write_file_atomically(const std::string& path, const std::string& text)
-{
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    {
-        std::ofstream out(tmp);
-        out << text;
-        out.close();
-        if (!out) {
-            std::error_code ec;
-            std::filesystem::remove(tmp, ec);
-            return Status::errorf("cannot write ", path);
-        }
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::filesystem::remove(tmp, ec);
-        return Status::errorf("cannot write ", path, ": ", ec.message());
-    }
-    return {};
-}
-
 /// What a fit or a measurement found (a measurement: no evaluations, 0 s).
 using Outcome = filmgrain::fit::FitResult;
 
@@ -513,7 +489,8 @@ Status fit_or_measure(const FitCommand& cmd, const sm::Datasheet& sheet, Outcome
         return s;
     if (!cmd.name.empty())
         out.stock.name = cmd.name;
-    return write_file_atomically(cmd.out_path, filmgrain::stock_to_json(out.stock, 2) + "\n");
+    return filmgrain::write_whole_file(cmd.out_path,
+                                       filmgrain::stock_to_json(out.stock, 2) + "\n");
 }
 
 /// What the model cannot reach for this datasheet: model_limits's bounds,

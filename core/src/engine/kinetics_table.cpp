@@ -23,6 +23,7 @@
 #include "util/parallel.h"
 #include "util/process_cache.h"
 #include "util/rng.h"
+#include "util/whole_file.h"
 
 namespace filmgrain {
 
@@ -459,33 +460,17 @@ void write_cached_table(const KineticsRates& rates, double shutter_s, const Deve
     if (dir.empty())
         return;
     // Best effort: a cache that cannot be written only costs the next
-    // process a build. Written to a temporary file of its own (process and
-    // thread), renamed into place whole.
+    // process a build. Written whole (util/whole_file.h).
     std::error_code ec;
     const std::string header    = table_file_header(rates, shutter_s, dev);
     const std::filesystem::path path = table_file(dir, header, table.options());
     std::filesystem::create_directories(path.parent_path(), ec);
     if (ec)
         return;
-    std::ostringstream tmp_name;
-    tmp_name << path.filename().string() << ".tmp-" << ::getpid() << "-"
-             << std::hash<std::thread::id>()(std::this_thread::get_id());
-    const std::filesystem::path tmp = path.parent_path() / tmp_name.str();
-    {
-        const std::string bytes = header + table.serialize();
-        const uint64_t check    = content_hash(bytes);
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out << bytes;
-        out.write(reinterpret_cast<const char*>(&check), sizeof check);
-        out.close();
-        if (!out) {
-            std::filesystem::remove(tmp, ec);
-            return;
-        }
-    }
-    std::filesystem::rename(tmp, path, ec);
-    if (ec)
-        std::filesystem::remove(tmp, ec);
+    std::string bytes    = header + table.serialize();
+    const uint64_t check = content_hash(bytes);
+    bytes.append(reinterpret_cast<const char*>(&check), sizeof check);
+    (void)write_whole_file(path, bytes);
 #else
     (void)rates, (void)shutter_s, (void)dev, (void)table;
 #endif
