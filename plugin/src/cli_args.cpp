@@ -456,8 +456,12 @@ std::string options_json()
                                         { "value", comps },
                                         { "default", OutputModifiers().compression },
                                         { "help", "OpenEXR compression" } } });
+    Json renamed = Json::object();
+    for (const RenamedModifier& r : renamed_modifiers())
+        renamed[r.old_key] = r.key;
     const Json doc = { { "options", options },
-                       { "modifiers", { { "--filmgrain", filmgrain }, { "-o", output } } } };
+                       { "modifiers", { { "--filmgrain", filmgrain }, { "-o", output } } },
+                       { "renamed_modifiers", { { "--filmgrain", renamed } } } };
     return doc.dump(2) + "\n";
 }
 
@@ -575,6 +579,11 @@ std::string help_text()
     for (const ModifierDoc& m : filmgrain_modifier_docs())
         append_wrapped(out, pad("    :" + m.key + "=" + m.form, kColumn),
                        m.help + ". Default: " + m.default_text + ".");
+    std::string renamed;
+    for (const RenamedModifier& r : renamed_modifiers())
+        renamed += std::string(renamed.empty() ? "" : ", ") + r.old_key + " -> " + r.key;
+    append_wrapped(out, "    ",
+                   "Renamed (the old names are still read, with a warning): " + renamed + ".");
 
     out << "\n-o modifiers:\n";
     std::string comps;
@@ -638,7 +647,7 @@ std::string help_text()
                    "filmgrain:stock_name, filmgrain:seed, filmgrain:frame and "
                    "filmgrain:static (sequences), filmgrain:grain_seed, "
                    "filmgrain:settings_hash, filmgrain:exposure_stops, "
-                   "filmgrain:shutter_s, filmgrain:frame_width_mm, filmgrain:engine, "
+                   "filmgrain:shutter_s, filmgrain:width_mm, filmgrain:engine, "
                    "filmgrain:version. Overscan (a data window beyond the display window) is "
                    "rendered too, at negative coordinates and beyond the scan.");
     append_wrapped(out, "    ",
@@ -701,7 +710,7 @@ std::string help_text()
     out << "\nExamples:\n"
         << "    filmgrain --wedge --filmgrain -o out/wedge.exr --preview out/wedge.png\n"
         << "    filmgrain --chart --filmgrain -o out/chart.exr --preview out/chart.png\n"
-        << "    filmgrain photo.png --filmgrain:stock=paper:exposure=1:seed=7 -d half -o "
+        << "    filmgrain photo.png --filmgrain:stock=paper:exposure_stops=1:seed=7 -d half -o "
            "photo_neg.exr\n";
     return out.str();
 }

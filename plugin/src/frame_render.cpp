@@ -192,9 +192,12 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
     Json j;
     j["version"]  = version_string();
     j["stock"]    = stock_to_json(opts.stock);
+    // The keys are frozen as they were when the hash was introduced (e.g.
+    // frame_width_mm, now width_mm; static, now static_grain): a renamed key
+    // would change every hash and re-render every --skip-existing frame.
     j["scene"]    = { { "exposure_stops", sc.exposure_stops },
                       { "shutter_s", sc.shutter_s },
-                      { "frame_width_mm", sc.frame_width_mm },
+                      { "frame_width_mm", sc.width_mm },
                       { "seed", sc.seed },
                       { "frame", sc.frame ? Json(*sc.frame) : Json(nullptr) },
                       { "static", sc.static_grain },

@@ -78,7 +78,7 @@ bool check_source(const OIIO::ImageBuf& src, std::string& error)
 }
 
 /// Where the film lies in src and in the scan. The frame is src's display
-/// (full) window (its data window when none is set): frame_width_mm
+/// (full) window (its data window when none is set): width_mm
 /// across it. The film the core renders is the box around the display and
 /// the data windows (`film_*`, src pixels), at the display window's pitch;
 /// the scan's grid is the display window's (scan_w x scan_h over it: the
@@ -122,11 +122,11 @@ bool map_film(const OIIO::ImageSpec& spec, const FilmgrainOptions& opts, FilmMap
     const int64_t x1 = std::max<int64_t>(fx + fw, int64_t(spec.x) + spec.width);
     const int64_t y1 = std::max<int64_t>(fy + fh, int64_t(spec.y) + spec.height);
     m.film_x = x0, m.film_y = y0, m.film_w = x1 - x0, m.film_h = y1 - y0;
-    m.film_width_mm = opts.scene.frame_width_mm * static_cast<double>(m.film_w)
+    m.film_width_mm = opts.scene.width_mm * static_cast<double>(m.film_w)
                       / static_cast<double>(fw);
     m.reference = Roi { fx - x0, fy - y0, fx - x0 + fw, fy - y0 + fh };
     SceneSettings scene  = opts.scene;
-    scene.frame_width_mm = m.film_width_mm;
+    scene.width_mm = m.film_width_mm;
     RenderSettings settings;
     settings.scan_width     = m.scan_w;
     settings.scan_height    = m.scan_h;
@@ -251,7 +251,7 @@ void set_metadata(OIIO::ImageSpec& spec, const FilmgrainOptions& opts)
     spec.attribute("filmgrain:grain_seed", std::to_string(grain_seed(opts.scene)));
     spec.attribute("filmgrain:exposure_stops", static_cast<float>(opts.scene.exposure_stops));
     spec.attribute("filmgrain:shutter_s", static_cast<float>(opts.scene.shutter_s));
-    spec.attribute("filmgrain:frame_width_mm", static_cast<float>(opts.scene.frame_width_mm));
+    spec.attribute("filmgrain:width_mm", static_cast<float>(opts.scene.width_mm));
     spec.attribute("filmgrain:edge", frame_edge_name(opts.scene.edge));
     spec.attribute("filmgrain:engine", engine_name(opts.engine_options.engine));
     spec.attribute("filmgrain:version", version_string());
@@ -270,7 +270,7 @@ bool filmgrain_impl(OIIO::ImageBuf& dst, const OIIO::ImageBuf& src,
     // The core sees the film (with its overscan) as its frame, and the
     // display window's scan as its scan (the reference).
     SceneSettings scene  = opts.scene;
-    scene.frame_width_mm = film.film_width_mm;
+    scene.width_mm = film.film_width_mm;
 
     RenderSettings settings;
     static_cast<EngineOptions&>(settings) = opts.engine_options;

@@ -19,7 +19,7 @@ namespace {
 FilmgrainOptions small_options()
 {
     FilmgrainOptions o;
-    o.scene.frame_width_mm = 0.3;
+    o.scene.width_mm = 0.3;
     o.scene.seed           = 7;
     return o;
 }
@@ -63,7 +63,7 @@ TEST(Operator, ChannelsWindowsAndMetadata)
     EXPECT_EQ(spec.get_string_attribute("filmgrain:stock"), stock_to_json(opts.stock));
     EXPECT_EQ(spec.get_string_attribute("filmgrain:stock_name"), opts.stock.name);
     EXPECT_EQ(spec.get_string_attribute("filmgrain:seed"), "7");
-    EXPECT_EQ(spec.get_float_attribute("filmgrain:frame_width_mm"), 0.3f);
+    EXPECT_EQ(spec.get_float_attribute("filmgrain:width_mm"), 0.3f);
     EXPECT_EQ(spec.get_float_attribute("filmgrain:exposure_stops", -1.f), 0.f);
     EXPECT_EQ(spec.get_float_attribute("filmgrain:shutter_s"),
               static_cast<float>(opts.scene.shutter_s));
@@ -188,7 +188,7 @@ TEST(Operator, ErrorsGoOnDst)
 TEST(Operator, CancelViaProgress)
 {
     FilmgrainOptions o     = small_options();
-    o.scene.frame_width_mm = 3.0;  // slow enough to be cancelled
+    o.scene.width_mm = 3.0;  // slow enough to be cancelled
     o.tile_size_px         = 4;
     o.progress             = [](double) { return false; };
     for (const char* stock : { "color-negative", "vision3-500t" }) {

@@ -72,9 +72,9 @@ int render(const CliArgs& a, const Console& con)
         return con.fail(s);
     ctx.opts.scene = cmd.scene;
     if (a.wedge && !cmd.has_width_mm)
-        ctx.opts.scene.frame_width_mm = WedgeSpec().strip_width_mm;
+        ctx.opts.scene.width_mm = WedgeSpec().strip_width_mm;
     if (a.chart && !cmd.has_width_mm)
-        ctx.opts.scene.frame_width_mm = ChartSpec().strip_width_mm;
+        ctx.opts.scene.width_mm = ChartSpec().strip_width_mm;
     ctx.opts.engine_options = cmd.engine_options;
     ctx.opts.scan_width     = cmd.scan_width;
     ctx.opts.scan_height    = cmd.scan_height;
@@ -171,6 +171,8 @@ int run(int argc, const char** argv)
     if (Status s = parse_command_line(argc, argv, args); !s)
         return Console(false, false).fail(s);
     const Console con(args.quiet, ::isatty(STDERR_FILENO) != 0, args.progress);
+    for (const std::string& notice : args.filmgrain.notices)
+        con.warning(notice);
 
     if (args.version || args.list_stocks || args.list_options || !args.print_stock.empty()) {
         if (!args.input.empty() || args.wedge || args.chart || args.has_filmgrain

@@ -93,7 +93,7 @@ bool parse_exposure(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return parse_decimal(v, cmd.scene.exposure_stops, why);
 }
 
-/// Seconds as a decimal number or a fraction N/D (shutter=1/48).
+/// Seconds as a decimal number or a fraction N/D (shutter_s=1/48).
 bool parse_shutter(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     const size_t slash = v.find('/');
@@ -166,7 +166,7 @@ bool parse_edge(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 bool parse_width_mm(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
     cmd.has_width_mm = true;
-    return parse_decimal(v, cmd.scene.frame_width_mm, why);
+    return parse_decimal(v, cmd.scene.width_mm, why);
 }
 
 bool parse_scan(std::string_view v, FilmgrainCommand& cmd, std::string& why)
@@ -384,10 +384,11 @@ const Modifier kModifiers[] = {
     { "stock", "NAME|FILE",
       "film stock: a built-in preset name or a stock JSON file (no ':' in the path)",
       [](const FilmgrainCommand& d) { return d.stock; }, parse_stock },
-    { "exposure", "STOPS", "exposure offset in stops relative to the stock's grey, [-64, 64]",
+    { "exposure_stops", "STOPS", "exposure offset in stops relative to the stock's grey, [-64, 64]",
       [](const FilmgrainCommand& d) { return format_number(d.scene.exposure_stops); },
       parse_exposure },
-    { "shutter", "SECONDS", "time the shutter is open, seconds or a fraction such as 1/48, (0, 1e7]",
+    { "shutter_s", "SECONDS",
+      "time the shutter is open, seconds or a fraction such as 1/48, (0, 1e7]",
       default_shutter, parse_shutter },
     { "seed", "N", "grain pattern: a whole number in [0, 2^64 - 1]",
       [](const FilmgrainCommand& d) { return std::to_string(d.scene.seed); }, parse_seed },
@@ -400,7 +401,7 @@ const Modifier kModifiers[] = {
                                              "--frames sets it per frame");
       },
       parse_frame },
-    { "static", "0|1", "1: the same grain on every frame (the seed as is, frame ignored)",
+    { "static_grain", "0|1", "1: the same grain on every frame (the seed as is, frame ignored)",
       [](const FilmgrainCommand& d) { return std::string(d.scene.static_grain ? "1" : "0"); },
       parse_static },
     { "edge", "clamp|gate",
@@ -410,7 +411,7 @@ const Modifier kModifiers[] = {
       [](const FilmgrainCommand& d) { return std::string(frame_edge_name(d.scene.edge)); },
       parse_edge },
     { "width_mm", "MM", "width of the film frame, millimetres, (0, 1e9]",
-      [](const FilmgrainCommand& d) { return format_number(d.scene.frame_width_mm); },
+      [](const FilmgrainCommand& d) { return format_number(d.scene.width_mm); },
       parse_width_mm },
     { "scan", "WxH|W",
       "scan (output) size in pixels over the whole frame; W alone keeps the frame's aspect",
@@ -494,6 +495,16 @@ const Modifier kModifiers[] = {
       parse_timing_value },
 };
 
+/// Modifiers renamed so that each name is the one the C++ fields, --stats,
+/// the EXR metadata and Python use, with its unit. The old names are still
+/// read, with a notice (FilmgrainCommand::notices), so that scripts written
+/// for them keep working; --help lists them.
+constexpr RenamedModifier kRenamed[] = {
+    { "exposure", "exposure_stops" },
+    { "shutter", "shutter_s" },
+    { "static", "static_grain" },
+};
+
 std::string modifier_list()
 {
     std::string s;
@@ -554,7 +565,20 @@ Status parse_filmgrain_impl(const std::string& arg, FilmgrainCommand& out)
     if (Status s = split_modifiers(arg, option, mods); !s)
         return s;
     FilmgrainCommand cmd;
-    for (const KeyValue& kv : mods) {
+    std::vector<std::string_view> keys;  // as renamed, to refuse one given twice
+    for (const KeyValue& given : mods) {
+        KeyValue kv = given;
+        for (const RenamedModifier& r : kRenamed)
+            if (kv.key == r.old_key) {
+                kv.key = r.key;
+                cmd.notices.push_back(std::string(r.old_key) + "= is now " + r.key
+                                      + "= (the old name is still read)");
+            }
+        for (std::string_view k : keys)
+            if (k == kv.key)
+                return Status::errorf(option, ": modifier '", kv.key,
+                                      "' given twice (under its old and its new name)");
+        keys.push_back(kv.key);
         const Modifier* mod = nullptr;
         for (const Modifier& m : kModifiers)
             if (kv.key == m.key)
@@ -563,11 +587,11 @@ Status parse_filmgrain_impl(const std::string& arg, FilmgrainCommand& out)
             return Status::errorf(option, ": unknown modifier '", printable(kv.key),
                                   "'; valid modifiers: ", modifier_list());
         if (kv.value.empty())
-            return Status::errorf(option, ": ", mod->key, "= has an empty value; expected ",
+            return Status::errorf(option, ": ", given.key, "= has an empty value; expected ",
                                   mod->key, "=", mod->form, " (", mod->help, ")");
         std::string why;
         if (!mod->parse(kv.value, cmd, why))
-            return Status::errorf(option, ": ", mod->key, "=", printable(kv.value), ": ", why,
+            return Status::errorf(option, ": ", given.key, "=", printable(kv.value), ": ", why,
                                   "; expected ", mod->key, "=", mod->form, " (", mod->help,
                                   ")");
     }
@@ -586,6 +610,11 @@ std::vector<ModifierDoc> filmgrain_modifier_docs()
     for (const Modifier& m : kModifiers)
         docs.push_back({ m.key, m.form, m.help, m.show_default(defaults) });
     return docs;
+}
+
+std::vector<RenamedModifier> renamed_modifiers()
+{
+    return { std::begin(kRenamed), std::end(kRenamed) };
 }
 
 Status parse_filmgrain_modifiers(const std::string& arg, FilmgrainCommand& out)

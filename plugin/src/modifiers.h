@@ -27,7 +27,8 @@ struct FilmgrainCommand {
     /// `stock=NAME|FILE`: a built-in preset name or a stock JSON file path
     /// (a path cannot contain ':', the modifier separator).
     std::string stock = default_preset_name();
-    /// `exposure=`, `shutter=`, `seed=`, `width_mm=`.
+    /// `exposure_stops=`, `shutter_s=`, `seed=`, `frame=`, `static_grain=`,
+    /// `edge=`, `width_mm=`.
     SceneSettings scene;
     /// Whether `width_mm=` was given (the --wedge and --chart strips have
     /// their own widths).
@@ -54,6 +55,9 @@ struct FilmgrainCommand {
     /// stock's own 18% grey on CDD 0.70 in every channel. Only with
     /// output=adx10|adx16 (apply_output refuses it otherwise).
     AdxTiming timing = AdxTiming::off;
+    /// What the caller should tell the user: a renamed modifier read under
+    /// its old name (renamed_modifiers()).
+    std::vector<std::string> notices;
 };
 
 /// One modifier as documented by --help: its key, the form of its value,
@@ -67,6 +71,17 @@ struct ModifierDoc {
 
 /// Every --filmgrain modifier, in the order --help lists them.
 std::vector<ModifierDoc> filmgrain_modifier_docs();
+
+/// A modifier's old name, still read (with a notice), and its name now.
+struct RenamedModifier {
+    const char* old_key;
+    const char* key;
+};
+
+/// The renamed modifiers: exposure -> exposure_stops, shutter -> shutter_s,
+/// static -> static_grain (each name now carries its unit, as in C++,
+/// --stats, the EXR metadata and Python).
+std::vector<RenamedModifier> renamed_modifiers();
 
 /// Parses one command-line word `--filmgrain[:key=value[:key=value...]]`.
 /// The part before the first ':' is the option's name and is not examined;

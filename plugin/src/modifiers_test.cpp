@@ -40,7 +40,7 @@ TEST(Modifiers, NoModifiersMeansDefaults)
     EXPECT_EQ(cmd.scene.seed, d.scene.seed);
     EXPECT_EQ(cmd.scene.exposure_stops, SceneSettings().exposure_stops);
     EXPECT_EQ(cmd.scene.shutter_s, SceneSettings().shutter_s);
-    EXPECT_EQ(cmd.scene.frame_width_mm, SceneSettings().frame_width_mm);
+    EXPECT_EQ(cmd.scene.width_mm, SceneSettings().width_mm);
     EXPECT_EQ(cmd.tile_size_px, RenderSettings().tile_size_px);
     EXPECT_EQ(cmd.scan_width, 0);
     EXPECT_FALSE(cmd.has_roi);
@@ -49,13 +49,13 @@ TEST(Modifiers, NoModifiersMeansDefaults)
 TEST(Modifiers, EveryModifier)
 {
     const FilmgrainCommand c = parse_ok(
-        "--filmgrain:stock=paper:exposure=-1.5:shutter=0.01:seed=18446744073709551615"
+        "--filmgrain:stock=paper:exposure_stops=-1.5:shutter_s=0.01:seed=18446744073709551615"
         ":width_mm=0.5:scan=640x480:roi=1,2,3,4:engine=exact:tile=16");
     EXPECT_EQ(c.stock, "paper");
     EXPECT_EQ(c.scene.exposure_stops, -1.5);
     EXPECT_EQ(c.scene.shutter_s, 0.01);
     EXPECT_EQ(c.scene.seed, 18446744073709551615ull);
-    EXPECT_EQ(c.scene.frame_width_mm, 0.5);
+    EXPECT_EQ(c.scene.width_mm, 0.5);
     EXPECT_EQ(c.scan_width, 640);
     EXPECT_EQ(c.scan_height, 480);
     EXPECT_TRUE(c.has_roi);
@@ -71,9 +71,9 @@ TEST(Modifiers, Forms)
 {
     EXPECT_EQ(parse_ok("--filmgrain:scan=320").scan_width, 320);
     EXPECT_EQ(parse_ok("--filmgrain:scan=320").scan_height, 0);
-    EXPECT_DOUBLE_EQ(parse_ok("--filmgrain:shutter=1/48").scene.shutter_s, 1.0 / 48.0);
-    EXPECT_EQ(parse_ok("--filmgrain:exposure=+2").scene.exposure_stops, 2.0);
-    EXPECT_EQ(parse_ok("--filmgrain:exposure=1e-1").scene.exposure_stops, 0.1);
+    EXPECT_DOUBLE_EQ(parse_ok("--filmgrain:shutter_s=1/48").scene.shutter_s, 1.0 / 48.0);
+    EXPECT_EQ(parse_ok("--filmgrain:exposure_stops=+2").scene.exposure_stops, 2.0);
+    EXPECT_EQ(parse_ok("--filmgrain:exposure_stops=1e-1").scene.exposure_stops, 0.1);
     EXPECT_EQ(parse_ok("--filmgrain:stock=dir/my=stock.json").stock, "dir/my=stock.json");
     EXPECT_EQ(parse_ok("--filmgrain:roi=0,0,1,1").roi_width, 1);
     EXPECT_EQ(parse_ok("--filmgrain:roi=-16,-8,1,1").roi_x, -16);
@@ -82,8 +82,8 @@ TEST(Modifiers, Forms)
     EXPECT_EQ(parse_ok("--filmgrain:frame=1001").scene.frame, 1001);
     EXPECT_EQ(parse_ok("--filmgrain:frame=-5").scene.frame, -5);
     EXPECT_EQ(parse_ok("--filmgrain:frame=1000000000").scene.frame, 1000000000);
-    EXPECT_TRUE(parse_ok("--filmgrain:frame=1:static=1").scene.static_grain);
-    EXPECT_FALSE(parse_ok("--filmgrain:static=0").scene.static_grain);
+    EXPECT_TRUE(parse_ok("--filmgrain:frame=1:static_grain=1").scene.static_grain);
+    EXPECT_FALSE(parse_ok("--filmgrain:static_grain=0").scene.static_grain);
     EXPECT_EQ(parse_ok("--filmgrain:edge=gate").scene.edge, FrameEdge::gate);
     EXPECT_EQ(parse_ok("--filmgrain").scene.edge, FrameEdge::clamp);
 }
@@ -103,15 +103,15 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         const char* expect[3];
     };
     const Case cases[] = {
-        { "--filmgrain:exposure=abc", { "exposure=abc", "not a decimal number", "STOPS" } },
-        { "--filmgrain:exposure=nan", { "exposure=nan", "finite", "STOPS" } },
-        { "--filmgrain:exposure=inf", { "exposure=inf", "finite", "STOPS" } },
-        { "--filmgrain:exposure=-infinity", { "exposure=-infinity", "finite", "STOPS" } },
-        { "--filmgrain:exposure=1e999", { "exposure=1e999", "range", "STOPS" } },
-        { "--filmgrain:exposure= 1", { "exposure= 1", "not a decimal", "STOPS" } },
-        { "--filmgrain:exposure=1x", { "exposure=1x", "not a decimal", "STOPS" } },
-        { "--filmgrain:exposure=+-1", { "exposure=+-1", "not a decimal", "STOPS" } },
-        { "--filmgrain:exposure=100", { "exposure = 100", "[-64, 64]", "" } },
+        { "--filmgrain:exposure_stops=abc", { "exposure_stops=abc", "not a decimal number", "STOPS" } },
+        { "--filmgrain:exposure_stops=nan", { "exposure_stops=nan", "finite", "STOPS" } },
+        { "--filmgrain:exposure_stops=inf", { "exposure_stops=inf", "finite", "STOPS" } },
+        { "--filmgrain:exposure_stops=-infinity", { "exposure_stops=-infinity", "finite", "STOPS" } },
+        { "--filmgrain:exposure_stops=1e999", { "exposure_stops=1e999", "range", "STOPS" } },
+        { "--filmgrain:exposure_stops= 1", { "exposure_stops= 1", "not a decimal", "STOPS" } },
+        { "--filmgrain:exposure_stops=1x", { "exposure_stops=1x", "not a decimal", "STOPS" } },
+        { "--filmgrain:exposure_stops=+-1", { "exposure_stops=+-1", "not a decimal", "STOPS" } },
+        { "--filmgrain:exposure_stops=100", { "exposure_stops = 100", "[-64, 64]", "" } },
         { "--filmgrain:seed=-1", { "seed=-1", "whole number", "N" } },
         { "--filmgrain:seed=1.5", { "seed=1.5", "whole number", "N" } },
         { "--filmgrain:seed=18446744073709551616", { "seed=18446744073709551616", "too large", "" } },
@@ -119,7 +119,7 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:frame=1000000001", { "frame=1000000001", "too large", "[-1000000000" } },
         { "--filmgrain:frame=1.5", { "frame=1.5", "whole number", "N" } },
         { "--filmgrain:frame=--1", { "frame=--1", "whole number", "N" } },
-        { "--filmgrain:static=2", { "static=2", "0 or 1", "0|1" } },
+        { "--filmgrain:static_grain=2", { "static_grain=2", "0 or 1", "0|1" } },
         { "--filmgrain:edge=wrap", { "edge=wrap", "clamp or gate", "clamp|gate" } },
         { "--filmgrain:scan=0x0", { "scan=0x0", "at least 1", "WxH" } },
         { "--filmgrain:scan=10x", { "scan=10x", "height", "WxH" } },
@@ -132,9 +132,9 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:roi=0,0,5", { "roi=0,0,5", "four numbers", "X,Y,W,H" } },
         { "--filmgrain:roi=0,0,5,5,5", { "roi=0,0,5,5,5", "four numbers", "X,Y,W,H" } },
         { "--filmgrain:roi=2147483647,0,1,1", { "roi=", "x + width", "" } },
-        { "--filmgrain:shutter=0", { "shutter = 0", "(0, 1e7]", "" } },
-        { "--filmgrain:shutter=1/0", { "shutter=1/0", "division by zero", "SECONDS" } },
-        { "--filmgrain:shutter=1/x", { "shutter=1/x", "fraction", "SECONDS" } },
+        { "--filmgrain:shutter_s=0", { "shutter_s = 0", "(0, 1e7]", "" } },
+        { "--filmgrain:shutter_s=1/0", { "shutter_s=1/0", "division by zero", "SECONDS" } },
+        { "--filmgrain:shutter_s=1/x", { "shutter_s=1/x", "fraction", "SECONDS" } },
         { "--filmgrain:width_mm=-3", { "width_mm = -3", "(0, 1e9]", "" } },
         { "--filmgrain:engine=quick", { "engine=quick", "unknown engine", "exact" } },
         { "--filmgrain:tolerance=0", { "tolerance=0", "(0, 1]", "" } },
@@ -146,7 +146,7 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
         { "--filmgrain:samples=300", { "samples=300", "at most 256", "" } },
         { "--filmgrain:tile=0", { "tile=0", "at least 1", "" } },
         { "--filmgrain:tile=5000", { "tile=5000", "at most 4096", "" } },
-        { "--filmgrain:exposure=", { "exposure=", "empty value", "STOPS" } },
+        { "--filmgrain:exposure_stops=", { "exposure_stops=", "empty value", "STOPS" } },
         { "--filmgrain:stock=", { "stock=", "empty value", "NAME|FILE" } },
         { "--filmgrain:seed=1:seed=2", { "'seed' given twice", "seed=1", "seed=2" } },
         { "--filmgrain:seed", { "'seed'", "no value", "key=value" } },
@@ -167,8 +167,8 @@ TEST(Modifiers, BadValuesNameKeyValueAndForm)
 TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
 {
     const auto docs = filmgrain_modifier_docs();
-    const char* keys[] = { "stock",    "exposure", "shutter", "seed",     "frame",
-                           "static",   "edge",     "width_mm",
+    const char* keys[] = { "stock",    "exposure_stops", "shutter_s", "seed",     "frame",
+                           "static_grain",   "edge",     "width_mm",
                            "scan",     "roi",      "engine",  "tolerance", "kinetics",
                            "photons",  "coverage", "grains",  "scale",    "samples",
                            "tile",     "output",   "timing" };
@@ -188,11 +188,41 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
         return std::string("(no such modifier)");
     };
     EXPECT_EQ(default_of("stock"), default_preset_name());
-    EXPECT_EQ(default_of("shutter"), "0.0208333 (1/48)");
+    EXPECT_EQ(default_of("shutter_s"), "0.0208333 (1/48)");
     EXPECT_EQ(default_of("engine"), engine_name(RenderSettings().engine));
     EXPECT_EQ(default_of("tile"), std::to_string(RenderSettings().tile_size_px));
-    EXPECT_EQ(default_of("static"), "0");
+    EXPECT_EQ(default_of("static_grain"), "0");
     EXPECT_EQ(default_of("edge"), "clamp");
+}
+
+TEST(Modifiers, RenamedModifiersAreReadUnderTheirOldNamesWithANotice)
+{
+    FilmgrainCommand now, old;
+    ASSERT_TRUE(parse_filmgrain_modifiers(
+        "--filmgrain:exposure_stops=1.5:shutter_s=1/24:frame=3:static_grain=1", now));
+    EXPECT_TRUE(now.notices.empty());
+    ASSERT_TRUE(parse_filmgrain_modifiers("--filmgrain:exposure=1.5:shutter=1/24:frame=3:static=1",
+                                          old));
+    EXPECT_EQ(old.scene.exposure_stops, now.scene.exposure_stops);
+    EXPECT_EQ(old.scene.shutter_s, now.scene.shutter_s);
+    EXPECT_EQ(old.scene.static_grain, now.scene.static_grain);
+    ASSERT_EQ(old.notices.size(), 3u);
+    EXPECT_EQ(old.notices[0], "exposure= is now exposure_stops= (the old name is still read)");
+    EXPECT_EQ(renamed_modifiers().size(), 3u);
+    for (const RenamedModifier& r : renamed_modifiers()) {
+        // The old name and the new one together: one modifier given twice.
+        FilmgrainCommand both;
+        const Status s = parse_filmgrain_modifiers(
+            std::string("--filmgrain:") + r.old_key + "=1:" + r.key + "=1", both);
+        ASSERT_FALSE(s.ok()) << r.old_key;
+        EXPECT_NE(s.message().find("given twice"), std::string::npos) << s.message();
+        // An error quotes the name the user wrote.
+        FilmgrainCommand bad;
+        const Status e = parse_filmgrain_modifiers(
+            std::string("--filmgrain:") + r.old_key + "=x", bad);
+        EXPECT_NE(e.message().find(std::string(r.old_key) + "=x"), std::string::npos)
+            << e.message();
+    }
 }
 
 TEST(Modifiers, OutputModifiers)
@@ -212,7 +242,7 @@ TEST(Modifiers, OutputModifiers)
 
 TEST(Modifiers, MessagesQuoteInputSafely)
 {
-    std::string arg = "--filmgrain:exposure=";
+    std::string arg = "--filmgrain:exposure_stops=";
     arg += std::string("\x01\xff\n", 3);
     arg += std::string(1000, 'z');
     const std::string m = parse_error(arg);
@@ -227,7 +257,7 @@ TEST(Modifiers, RandomInputsNeverCrash)
     std::mt19937_64 rng(1);
     const std::string alphabet = "0123456789:=,x/.-+eE abcdefghijklmnopqrstuvwxyz_\x00\xff";
     const std::string seeds[] = {
-        "--filmgrain:stock=paper:exposure=1:shutter=1/48:seed=7:width_mm=0.5",
+        "--filmgrain:stock=paper:exposure_stops=1:shutter_s=1/48:seed=7:width_mm=0.5",
         "--filmgrain:scan=64x48:roi=1,2,3,4:engine=exact:tile=8",
     };
     for (int i = 0; i < 20000; ++i) {

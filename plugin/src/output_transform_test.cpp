@@ -234,7 +234,7 @@ TEST(OutputTransform, RegrainOfUniformPatchesKeepsTheMeanAndCarriesTheGrain)
     p.side     = 128;
     p.pitch_um = 48.0;
     const int w = p.side * static_cast<int>(p.stops.size()), h = p.side;
-    opts.scene.frame_width_mm = w * p.pitch_um / 1000.0;
+    opts.scene.width_mm = w * p.pitch_um / 1000.0;
     opts.scene.seed           = 5;
     // The pixel scale (each pixel drawn from the Boolean model's pixel law:
     // 48 um pixels hold ~800 grains each) keeps the 37 mm^2 patches fast;
@@ -336,7 +336,7 @@ TEST(OutputTransform, RegrainOfUniformPatchesKeepsTheMeanAndCarriesTheGrain)
 TEST(OutputTransform, RegrainRefusesAnotherScanSizeAndTooManyLayers)
 {
     FilmgrainOptions opts;
-    opts.scene.frame_width_mm = 0.2;
+    opts.scene.width_mm = 0.2;
     OIIO::ImageBuf src(OIIO::ImageSpec(8, 8, 3, OIIO::TypeFloat));
     OIIO::ImageBufAlgo::fill(src, { 0.18f, 0.18f, 0.18f });
     opts.scan_width = 4;

@@ -17,11 +17,11 @@ std::string stats_json(const RunReport& r)
     j["stock"]          = r.stock_name;
     j["seed"]           = r.scene.seed;
     j["frame"]          = r.scene.frame ? Json(*r.scene.frame) : Json(nullptr);
-    j["static"]         = r.scene.static_grain;
+    j["static_grain"]   = r.scene.static_grain;
     j["grain_seed"]     = grain_seed(r.scene);
     j["exposure_stops"] = r.scene.exposure_stops;
     j["shutter_s"]      = r.scene.shutter_s;
-    j["frame_width_mm"] = r.scene.frame_width_mm;
+    j["width_mm"]       = r.scene.width_mm;
     j["seconds"]        = { { "read", r.seconds.read },
                             { "color", r.seconds.color },
                             { "simulate", r.seconds.simulate },

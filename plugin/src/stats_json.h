@@ -2,8 +2,8 @@
 //
 // Its key names are a contract for scripts (tests/cli checks them):
 //   engine, version, output (density|adx10|adx16|regrain), stock, seed,
-//   frame (null for a single image), static,
-//   grain_seed, exposure_stops, shutter_s, frame_width_mm,
+//   frame (null for a single image), static_grain,
+//   grain_seed, exposure_stops, shutter_s, width_mm,
 //   seconds {read, color, simulate, write, total},
 //   scan {width, height, pitch_x_um, pitch_y_um},
 //   roi {x, y, width, height},

@@ -24,6 +24,7 @@ a render within about a tenth of a second.
 import json
 import numbers
 import os
+import warnings
 
 import numpy as np
 
@@ -48,8 +49,8 @@ Error = _filmgrain.Error
 Error.__module__ = __name__
 
 # Option name in the modifier string: messages of the CLI's parser start
-# with it ("filmgrain.render: exposure=100: ...", where the CLI says
-# "--filmgrain: exposure=100: ...").
+# with it ("filmgrain.render: exposure_stops=100: ...", where the CLI says
+# "--filmgrain: exposure_stops=100: ...").
 _OPTION = "filmgrain.render"
 
 
@@ -131,9 +132,9 @@ def _stock_name(value):
 def _format_value(key, value):
     """One modifier value in the CLI's syntax. Numbers round-trip exactly:
     floats as repr (the shortest string that reads back as the same double),
-    integers in decimal; strings pass unchanged (e.g. shutter="1/48")."""
+    integers in decimal; strings pass unchanged (e.g. shutter_s="1/48")."""
     if isinstance(value, bool):
-        if key == "static":
+        if key == "static_grain":
             return "1" if value else "0"
         raise TypeError(f"{key}={value!r}: expected a number or a string, not a bool")
     if isinstance(value, numbers.Integral):
@@ -161,9 +162,26 @@ def _format_value(key, value):
     return text
 
 
+def _renamed(modifiers):
+    """modifiers with the CLI's renamed modifiers (exposure, shutter,
+    static: now exposure_stops, shutter_s, static_grain) under their new
+    names, each old name given warned of (DeprecationWarning)."""
+    out = dict(modifiers)
+    for old, new in _filmgrain.renamed_modifiers():
+        if out.get(old) is None:
+            out.pop(old, None)
+            continue
+        if out.get(new) is not None:
+            raise TypeError(f"{old}= and {new}= name the same modifier ({old} is its old name)")
+        warnings.warn(f"filmgrain: {old}= is now {new}= (the old name is still read)",
+                      DeprecationWarning, stacklevel=5)
+        out[new] = out.pop(old)
+    return out
+
+
 def _modifier_string(modifiers):
     parts = [_OPTION]
-    for key, value in modifiers.items():
+    for key, value in _renamed(modifiers).items():
         if value is None:
             continue
         if not isinstance(key, str) or not key or ":" in key or "=" in key:
@@ -197,11 +215,11 @@ def render(
     pixels,
     *,
     stock=None,
-    exposure=None,
-    shutter=None,
+    exposure_stops=None,
+    shutter_s=None,
     seed=None,
     frame=None,
-    static=None,
+    static_grain=None,
     edge=None,
     width_mm=None,
     scan=None,
@@ -241,14 +259,15 @@ def render(
             path (str or os.PathLike, ':' allowed), or a dict in the stock
             JSON format (e.g. from :func:`stock`, modified; absent keys take
             the defaults). Default: the default preset.
-        exposure: exposure offset, stops (float), [-64, 64].
-        shutter: shutter time, seconds (float, or a string fraction
+        exposure_stops: exposure offset, stops (float), [-64, 64].
+        shutter_s: shutter time, seconds (float, or a string fraction
             "1/48"), (0, 1e7].
         seed: grain pattern, int in [0, 2**64 - 1].
         frame: frame number of a sequence, int in [-1e9, 1e9]: the grain
             of frame N is frame_seed(seed, N), the same as the CLI's
             ``frame=N`` and ``--frames``. Default: a single image.
-        static: with frame: True keeps one grain pattern on every frame.
+        static_grain: with frame: True keeps one grain pattern on every
+            frame.
         edge: beyond the image (MODEL.md 2): "clamp" (the default: the
             scene continues, each point exposed as the nearest edge pixel)
             or "gate" (no light: a camera gate's hard edge).
@@ -309,11 +328,11 @@ def render(
         KeyboardInterrupt: Ctrl-C during the render (which stops).
     """
     modifiers = dict(
-        exposure=exposure,
-        shutter=shutter,
+        exposure_stops=exposure_stops,
+        shutter_s=shutter_s,
         seed=seed,
         frame=frame,
-        static=static,
+        static_grain=static_grain,
         edge=edge,
         width_mm=width_mm,
         scan=scan,

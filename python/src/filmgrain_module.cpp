@@ -340,4 +340,13 @@ PYBIND11_MODULE(_filmgrain, m)
     m.def("version", []() { return std::string(filmgrain::version_string()); });
     m.def("modifier_docs", &fp::modifier_docs,
           "The CLI's --filmgrain modifiers: (key, form, help, default).");
+    m.def(
+        "renamed_modifiers",
+        []() {
+            std::vector<std::pair<std::string, std::string>> out;
+            for (const filmgrain::cli::RenamedModifier& r : filmgrain::cli::renamed_modifiers())
+                out.emplace_back(r.old_key, r.key);
+            return out;
+        },
+        "The CLI's renamed --filmgrain modifiers: (old name, name now).");
 }

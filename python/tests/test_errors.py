@@ -33,8 +33,8 @@ def module_message(**kwargs):
 # Modifier errors: the CLI's parser prefixes its option's name ("--filmgrain:
 # "), the module its own ("filmgrain.render: "); the rest is the same text.
 @pytest.mark.parametrize("cli_mods, kwargs", [
-    ({"exposure": 100}, {"exposure": 100}),
-    ({"exposure": "nan"}, {"exposure": float("nan")}),
+    ({"exposure_stops": 100}, {"exposure_stops": 100}),
+    ({"exposure_stops": "nan"}, {"exposure_stops": float("nan")}),
     ({"seed": "1.5"}, {"seed": 1.5}),
     ({"seed": "-1"}, {"seed": -1}),
     ({"frame": "2000000000"}, {"frame": 2 * 10**9}),
@@ -42,8 +42,8 @@ def module_message(**kwargs):
     ({"engine": "bogus"}, {"engine": "bogus"}),
     ({"scan": "0x10"}, {"scan": (0, 10)}),
     ({"roi": "1,2,3"}, {"roi": (1, 2, 3)}),
-    ({"shutter": "1/0"}, {"shutter": "1/0"}),
-    ({"static": "2"}, {"static": 2}),
+    ({"shutter_s": "1/0"}, {"shutter_s": "1/0"}),
+    ({"static_grain": "2"}, {"static_grain": 2}),
     ({"kinetics": "fastest"}, {"kinetics": "fastest"}),
     ({"colour": "red"}, {"colour": "red"}),
 ])
@@ -120,8 +120,8 @@ def test_non_contiguous_pixels_are_copied_not_refused():
 
 
 @pytest.mark.parametrize("kwargs, exc, text", [
-    ({"exposure": True}, TypeError, "exposure=True"),
-    ({"exposure": [1.0]}, TypeError, "exposure=[1.0]"),
+    ({"exposure_stops": True}, TypeError, "exposure_stops=True"),
+    ({"exposure_stops": [1.0]}, TypeError, "exposure_stops=[1.0]"),
     ({"roi": (0, 0, 4.0, 4)}, TypeError, "roi="),
     ({"engine": "exact:seed=3"}, ValueError, "cannot contain ':'"),
     ({"stock": 3}, TypeError, "stock=3"),

@@ -15,19 +15,19 @@ from conftest import (FAST_WIDTH_MM, HEIGHT, WIDTH, Exr, assert_same_as_cli, mod
 # settings as render() keywords (Python values: floats, ints, tuples).
 CASES = {
     "paper": (
-        {"stock": "paper", "seed": 11, "width_mm": FAST_WIDTH_MM, "exposure": "0.75"},
-        {"stock": "paper", "seed": 11, "width_mm": FAST_WIDTH_MM, "exposure": 0.75},
+        {"stock": "paper", "seed": 11, "width_mm": FAST_WIDTH_MM, "exposure_stops": "0.75"},
+        {"stock": "paper", "seed": 11, "width_mm": FAST_WIDTH_MM, "exposure_stops": 0.75},
     ),
     "color-negative-frame-roi": (
         {"stock": "color-negative", "seed": 18446744073709551615, "frame": -42,
-         "width_mm": 0.6, "shutter": "1/24", "exposure": "-0.3", "roi": "5,7,40,30"},
+         "width_mm": 0.6, "shutter_s": "1/24", "exposure_stops": "-0.3", "roi": "5,7,40,30"},
         {"stock": "color-negative", "seed": 2**64 - 1, "frame": -42, "width_mm": 0.6,
-         "shutter": 1 / 24, "exposure": -0.3, "roi": (5, 7, 40, 30)},
+         "shutter_s": 1 / 24, "exposure_stops": -0.3, "roi": (5, 7, 40, 30)},
     ),
     "scan-static-exact": (
-        {"seed": 3, "frame": 1001, "static": 1, "width_mm": 0.3, "scan": "40x30",
+        {"seed": 3, "frame": 1001, "static_grain": 1, "width_mm": 0.3, "scan": "40x30",
          "engine": "exact", "tile": 16},
-        {"seed": 3, "frame": 1001, "static": True, "width_mm": 0.3, "scan": (40, 30),
+        {"seed": 3, "frame": 1001, "static_grain": True, "width_mm": 0.3, "scan": (40, 30),
          "engine": "exact", "tile": 16},
     ),
     "expert-tolerance": (
@@ -138,13 +138,30 @@ def test_frames_have_their_own_grain_and_static_keeps_the_seeds():
     single = filmgrain.render(pixels, **kw)
     f1 = filmgrain.render(pixels, frame=1, **kw)
     f2 = filmgrain.render(pixels, frame=2, **kw)
-    static = filmgrain.render(pixels, frame=2, static=True, **kw)
+    static = filmgrain.render(pixels, frame=2, static_grain=True, **kw)
     assert f1.density.tobytes() != f2.density.tobytes()
     assert f1.stats["grain_seed"] != f2.stats["grain_seed"]
     assert static.stats["grain_seed"] == single.stats["grain_seed"] == 7
     assert static.density.tobytes() == single.density.tobytes()
-    assert (f2.stats["frame"], f2.stats["static"]) == (2, False)
+    assert (f2.stats["frame"], f2.stats["static_grain"]) == (2, False)
     assert single.stats["frame"] is None
+
+
+def test_renamed_keywords_still_read_with_a_deprecation_warning():
+    pixels = scene_pixels()
+    kw = {"seed": 4, "width_mm": FAST_WIDTH_MM, "frame": 2}
+    now = filmgrain.render(pixels, exposure_stops=0.5, shutter_s="1/100", static_grain=True,
+                           **kw)
+    with pytest.warns(DeprecationWarning) as said:
+        old = filmgrain.render(pixels, exposure=0.5, shutter="1/100", static=True, **kw)
+    texts = sorted(str(w.message) for w in said)
+    assert texts == [f"filmgrain: {o}= is now {n}= (the old name is still read)"
+                     for o, n in [("exposure", "exposure_stops"), ("shutter", "shutter_s"),
+                                  ("static", "static_grain")]]
+    assert all(w.filename == __file__ for w in said)  # points at the caller
+    assert old.density.tobytes() == now.density.tobytes()
+    with pytest.raises(TypeError, match="name the same modifier"):
+        filmgrain.render(pixels, exposure=1, exposure_stops=1, **kw)
 
 
 def test_numbers_reach_the_core_exactly():
@@ -152,11 +169,11 @@ def test_numbers_reach_the_core_exactly():
     same double (the stats print it back with 17 digits)."""
     pixels = scene_pixels(16, 12)
     exposure, shutter, width = 0.1 + 0.2, 1 / 3, 0.123456789012345678
-    negative = filmgrain.render(pixels, exposure=exposure, shutter=shutter, width_mm=width)
+    negative = filmgrain.render(pixels, exposure_stops=exposure, shutter_s=shutter, width_mm=width)
     assert negative.stats["exposure_stops"] == exposure
     assert negative.stats["shutter_s"] == shutter
-    assert negative.stats["frame_width_mm"] == width
-    as_f32 = filmgrain.render(pixels, exposure=np.float32(0.1), width_mm=0.2)
+    assert negative.stats["width_mm"] == width
+    as_f32 = filmgrain.render(pixels, exposure_stops=np.float32(0.1), width_mm=0.2)
     assert as_f32.stats["exposure_stops"] == float(np.float32(0.1))
 
 

@@ -477,19 +477,19 @@ def test_stock_is_a_directory(fg_bin, dirs):
 
 
 # ---------------------------------------------------------------------------
-# Modifiers with bad values (beyond test_errors.py's exposure=abc, seed=-1,
+# Modifiers with bad values (beyond test_errors.py's exposure_stops=abc, seed=-1,
 # scan=0x0 ...). Each names the modifier.
 
 MODIFIER_CASES = [
-    ("shutter_zero", "shutter=0", ["shutter", "(0, 1e7]"]),
-    ("shutter_negative", "shutter=-1", ["shutter", "(0, 1e7]"]),
-    ("shutter_divide_by_zero", "shutter=1/0", ["shutter=1/0", "division by zero"]),
-    ("shutter_fraction_garbage", "shutter=1/x", ["shutter=1/x"]),
-    ("shutter_too_long", "shutter=1e8", ["shutter", "(0, 1e7]"]),
-    ("exposure_overflow", "exposure=1e999", ["exposure=1e999", "range"]),
-    ("exposure_inf", "exposure=inf", ["exposure=inf"]),
-    ("exposure_hex", "exposure=0x10", ["exposure=0x10"]),
-    ("exposure_spaces", "exposure= 1", ["exposure= 1"]),
+    ("shutter_zero", "shutter_s=0", ["shutter", "(0, 1e7]"]),
+    ("shutter_negative", "shutter_s=-1", ["shutter", "(0, 1e7]"]),
+    ("shutter_divide_by_zero", "shutter_s=1/0", ["shutter_s=1/0", "division by zero"]),
+    ("shutter_fraction_garbage", "shutter_s=1/x", ["shutter_s=1/x"]),
+    ("shutter_too_long", "shutter_s=1e8", ["shutter", "(0, 1e7]"]),
+    ("exposure_overflow", "exposure_stops=1e999", ["exposure_stops=1e999", "range"]),
+    ("exposure_inf", "exposure_stops=inf", ["exposure_stops=inf"]),
+    ("exposure_hex", "exposure_stops=0x10", ["exposure_stops=0x10"]),
+    ("exposure_spaces", "exposure_stops= 1", ["exposure_stops= 1"]),
     ("width_zero", "width_mm=0", ["width_mm", "(0, 1e9]"]),
     ("width_huge", "width_mm=1e10", ["width_mm", "(0, 1e9]"]),
     ("seed_too_big", "seed=18446744073709551616", ["seed=18446744073709551616", "too large"]),

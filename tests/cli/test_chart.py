@@ -47,14 +47,14 @@ def test_chart_renders_exr_and_preview(chart):
     exr = Exr(d / "chart.exr")
     assert (exr.spec.width, exr.spec.height, exr.spec.nchannels) == (WIDTH, HEIGHT, 3)
     # The chart's own strip width, as the wedge has its own.
-    assert exr.attr("filmgrain:frame_width_mm") == pytest.approx(STRIP_MM)
+    assert exr.attr("filmgrain:width_mm") == pytest.approx(STRIP_MM)
     png = oiio.ImageBuf(str(d / "chart.png"))
     assert not png.has_error, png.geterror()
     assert (png.spec().width, png.spec().height) == (WIDTH, HEIGHT)
     s = read_json(d / "s.json")
     assert s["input"]["file"] == "chart"
     assert s["input"]["colorspace"] == "scene_linear"
-    assert s["frame_width_mm"] == pytest.approx(STRIP_MM)
+    assert s["width_mm"] == pytest.approx(STRIP_MM)
 
 
 def test_chart_point_light_is_denser_than_the_ground(chart):

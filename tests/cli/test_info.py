@@ -5,7 +5,7 @@ import re
 
 from conftest import FAST, Exr, listing, rgb_ramp, write_image
 
-MODIFIERS = ["stock", "exposure", "shutter", "seed", "frame", "static", "edge", "width_mm", "scan", "roi",
+MODIFIERS = ["stock", "exposure_stops", "shutter_s", "seed", "frame", "static_grain", "edge", "width_mm", "scan", "roi",
              "engine", "tolerance", "kinetics", "photons", "coverage", "grains", "scale", "samples",
              "tile", "output", "timing"]
 
@@ -39,8 +39,8 @@ def test_help_lists_every_option_and_modifier_with_default(run):
         assert "Default:" in line, (key, line)
     # The defaults are the library's (SceneSettings, RenderSettings, preset).
     assert "Default: vision3-500t." in mods["stock"]
-    assert "Default: 0." in mods["exposure"]
-    assert "Default: 0.0208333 (1/48)." in mods["shutter"]
+    assert "Default: 0." in mods["exposure_stops"]
+    assert "Default: 0.0208333 (1/48)." in mods["shutter_s"]
     assert "Default: 0." in mods["seed"]
     assert "Default: 24.89." in mods["width_mm"]
     assert "Default: auto." in mods["engine"]

@@ -13,7 +13,7 @@ from conftest import (FAST, HEIGHT, WIDTH, Exr, clean_env, listing, minimal_ocio
                       read_json, rgb_ramp, write_image)
 
 STATS_KEYS = {"engine", "seconds", "version", "stock", "seed", "exposure_stops",
-              "shutter_s", "frame_width_mm", "scan", "roi", "input", "layers"}
+              "shutter_s", "width_mm", "scan", "roi", "input", "layers"}
 
 
 @pytest.fixture
@@ -26,7 +26,7 @@ def ramp_exr(tmp_path):
 def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     out, stats, preview = tmp_path / "out.exr", tmp_path / "s.json", tmp_path / "p.png"
     # The default stock, vision3-500t: these 15.6 um pixels at pixel scale.
-    args = [ramp_exr, f"--filmgrain:{FAST}:seed=42:exposure=0.5:shutter=1/100",
+    args = [ramp_exr, f"--filmgrain:{FAST}:seed=42:exposure_stops=0.5:shutter_s=1/100",
             "-o", out, "--stats", stats, "--preview", preview]
     if dtype:
         args += ["-d", dtype]
@@ -54,7 +54,7 @@ def test_normal_run(run, tmp_path, ramp_exr, dtype, oiio_type):
     assert exr.attr("filmgrain:seed") == "42"
     assert exr.attr("filmgrain:exposure_stops") == pytest.approx(0.5)
     assert exr.attr("filmgrain:shutter_s") == pytest.approx(0.01)
-    assert exr.attr("filmgrain:frame_width_mm") == pytest.approx(0.5)
+    assert exr.attr("filmgrain:width_mm") == pytest.approx(0.5)
     assert exr.attr("filmgrain:engine") == "auto"
     assert exr.attr("filmgrain:version") == \
         run("--version").stdout.split()[1]
@@ -118,6 +118,32 @@ def test_stats_path_is_modifiers(run, tmp_path, ramp_exr, stock, word):
     chosen = layer_path("", "auto")
     assert "exposure=" not in chosen and word in chosen, chosen
     assert layer_path(":" + chosen.replace(" ", ":"), "pasted") == chosen
+
+
+def test_renamed_modifiers_still_read_with_a_warning(run, tmp_path, ramp_exr):
+    """exposure=, shutter= and static= (now exposure_stops=, shutter_s=,
+    static_grain=) render the same pixels and say what they are now;
+    --list-options maps them."""
+    def render(mods, name):
+        out = tmp_path / f"{name}.exr"
+        r = run(ramp_exr, f"--filmgrain:{FAST}:frame=2:{mods}", "-o", out)
+        assert r.returncode == 0, r.stderr
+        return Exr(out), r.stderr
+
+    now, quiet = render("exposure_stops=0.5:shutter_s=1/100:static_grain=1", "now")
+    old, said = render("exposure=0.5:shutter=1/100:static=1", "old")
+    assert "is now" not in quiet
+    for old_key, key in [("exposure", "exposure_stops"), ("shutter", "shutter_s"),
+                         ("static", "static_grain")]:
+        assert f"warning: {old_key}= is now {key}=" in said, said
+    for name in now.names:
+        assert np.array_equal(now.channels[name], old.channels[name]), name
+    table = json.loads(run("--list-options").stdout)
+    assert table["renamed_modifiers"]["--filmgrain"] == {
+        "exposure": "exposure_stops", "shutter": "shutter_s", "static": "static_grain"}
+    both = run(ramp_exr, f"--filmgrain:{FAST}:exposure=1:exposure_stops=1", "-o",
+               tmp_path / "both.exr")
+    assert both.returncode != 0 and "given twice" in both.stderr, both.stderr
 
 
 def test_same_seed_same_pixels_other_seed_other_pixels(run, tmp_path, ramp_exr):

@@ -78,7 +78,7 @@ def test_neighbouring_frames_differ_and_static_keeps_one_pattern(run, dirs):
     assert r.returncode == 0, r.stderr
     a, b = pixels(outdir / "moving.0001.exr"), pixels(outdir / "moving.0002.exr")
     assert np.mean(a != b) > 0.9, np.mean(a != b)
-    r = run(indir / "still.exr", "--frames", "1,2", f"--filmgrain:{FAST}:static=1", "-o",
+    r = run(indir / "still.exr", "--frames", "1,2", f"--filmgrain:{FAST}:static_grain=1", "-o",
             outdir / "static.@@@.exr")
     assert r.returncode == 0, r.stderr
     a, b = pixels(outdir / "static.001.exr"), pixels(outdir / "static.002.exr")
@@ -170,7 +170,7 @@ def test_skip_existing_rerenders_only_what_changed(run, dirs):
     for f in (1, 2, 3):
         assert np.array_equal(pixels(outdir / f"n.{f:04d}.exr"), first[f]), f
     # A changed setting re-renders every frame.
-    r = run(*args[:3], f"--filmgrain:{FAST}:seed=3:exposure=1", *args[4:])
+    r = run(*args[:3], f"--filmgrain:{FAST}:seed=3:exposure_stops=1", *args[4:])
     assert r.returncode == 0 and "3 rendered" in r.stderr, r.stderr
 
 

@@ -30,7 +30,7 @@ by more than its detectable bias fails it. The detectable bias is checked too: t
 fails if the run was too noisy to see a bias of 0.02 D pooled over a third
 of the wedge (so it cannot rot into a test that passes whatever happens).
 
-To see it fail: pass --extra-auto exposure=0.05 (both auto configurations
+To see it fail: pass --extra-auto exposure_stops=0.05 (both auto configurations
 one twentieth of a stop too bright, about 0.01 D).
 
 Timing is printed, never asserted.

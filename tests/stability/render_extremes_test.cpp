@@ -85,7 +85,7 @@ Outcome render_uniform(const Stock& stock, Engine engine, double stops, double f
     SceneSettings scene;
     scene.exposure_stops = stops;
     scene.shutter_s      = shutter_s;
-    scene.frame_width_mm = frame_um / 1000.0;
+    scene.width_mm = frame_um / 1000.0;
     scene.seed           = seed;
     std::vector<float> input(4, 0.18f);
     const ImageView view { input.data(), 2, 2, 1 };
@@ -375,7 +375,7 @@ TEST(StabilityRender, HugeExposureSaturatesAndFinishes)
             EXPECT_TRUE(finishes_within(30.0, [&] {
                 SceneSettings scene;
                 scene.exposure_stops = c.stops;
-                scene.frame_width_mm = 0.2;
+                scene.width_mm = 0.2;
                 std::vector<float> input(4, c.value);
                 const ImageView view { input.data(), 2, 2, 1 };
                 RenderSettings settings;

@@ -50,7 +50,7 @@ FarRender render_far(int64_t w, int64_t h, int64_t from_end, bool at_origin = fa
     SceneSettings scene;
     scene.exposure_stops = kStops;
     scene.shutter_s      = kShutterS;
-    scene.frame_width_mm = kFrameWidthMm;
+    scene.width_mm = kFrameWidthMm;
     scene.seed           = 64;
     static const std::vector<float> input(kInputWidth, 0.18f);
     const ImageView view { input.data(), kInputWidth, 1, 1 };
@@ -171,7 +171,7 @@ TEST(StabilityScale64, ScanBeyondTheDocumentedLimitIsRefused)
     // FrameGeometry allows at most 2^40 scan pixels a side: beyond, an
     // error that names the scan, not an overflow.
     SceneSettings scene;
-    scene.frame_width_mm = kFrameWidthMm;
+    scene.width_mm = kFrameWidthMm;
     std::vector<float> input(4, 0.18f);
     const ImageView view { input.data(), 4, 1, 1 };
     RenderSettings settings;

@@ -51,7 +51,7 @@ std::vector<double> rim_z(const Stock& stock, Engine engine, FrameEdge edge, dou
 {
     SceneSettings scene;
     scene.exposure_stops = stops;
-    scene.frame_width_mm = static_cast<double>(w) * pitch_um / 1000.0;
+    scene.width_mm = static_cast<double>(w) * pitch_um / 1000.0;
     scene.seed           = seed;
     scene.edge           = edge;
     std::vector<float> input(static_cast<size_t>(w * h), 0.18f);
@@ -163,7 +163,7 @@ TEST(FrameEdge, AUniformPlateHasNoGradientTowardItsEdges)
     ASSERT_TRUE(load_stock("vision3-500t", stock));
     SceneSettings scene;
     const int64_t w = 256, h = 160;
-    scene.frame_width_mm = static_cast<double>(w) * 6.0 / 1000.0;
+    scene.width_mm = static_cast<double>(w) * 6.0 / 1000.0;
     scene.seed           = 9;
     std::vector<float> input(static_cast<size_t>(w * h), 0.18f);
     const ImageView view { input.data(), w, h, 1 };

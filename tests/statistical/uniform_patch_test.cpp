@@ -34,7 +34,7 @@ PatchResult render_patch(const Stock& stock, double stops, double shutter_s, uin
     SceneSettings scene;
     scene.exposure_stops = stops;
     scene.shutter_s      = shutter_s;
-    scene.frame_width_mm = 2.0;
+    scene.width_mm = 2.0;
     scene.seed           = seed;
     std::vector<float> input(8 * 8, 0.18f);
     const ImageView view { input.data(), 8, 8, 1 };

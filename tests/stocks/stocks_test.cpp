@@ -716,7 +716,7 @@ TEST(Fitter, RenderCheckRendersALayerAloneAsInTheWholeStock)
     const ImageView input { &grey, 1, 1, 1 };
     SceneSettings scene;
     scene.exposure_stops = 2.0;
-    scene.frame_width_mm = 0.04;
+    scene.width_mm = 0.04;
     scene.seed           = 7;
     RenderSettings rs;
     rs.engine      = Engine::exact;

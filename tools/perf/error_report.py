@@ -895,7 +895,7 @@ def main(argv=None):
                          "steps are 143 um wide)")
     ap.add_argument("--extra-auto", default="",
                     help="modifiers appended to the auto configurations (auto, auto with the "
-                         "table forced), e.g. exposure=0.05: "
+                         "table forced), e.g. exposure_stops=0.05: "
                          "a deliberately wrong default, to see tests/perf fail")
     args = ap.parse_args(argv)
     args.selection = selection_args(ap, args)

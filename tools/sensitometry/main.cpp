@@ -603,7 +603,7 @@ private:
         const filmgrain::WedgeSpec spec;
         const std::vector<float> input = filmgrain::make_step_wedge(spec);
         filmgrain::SceneSettings scene;
-        scene.frame_width_mm = spec.strip_width_mm;
+        scene.width_mm = spec.strip_width_mm;
         scene.seed           = m_opt.seed;
         scene.shutter_s      = 1e-2;
         filmgrain::RenderSettings rs;

@@ -88,7 +88,7 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
                                ? std::log2(spec.exposure_lxs / stock.exposure_at_grey_lxs)
                                : 0.0;
     scene.shutter_s      = spec.shutter_s;
-    scene.frame_width_mm = static_cast<double>(scan_px) * pitch_um / 1000.0;
+    scene.width_mm = static_cast<double>(scan_px) * pitch_um / 1000.0;
     scene.seed           = spec.seed;
     const ImageView input { input_pixels.data(), input_px, input_px, 1 };
     RenderSettings rs;

@@ -44,7 +44,7 @@ struct SceneSettings {
     /// 24 fps. (0, 1e7].
     double shutter_s = 1.0 / 48.0;
     /// Width of the film frame, millimetres (Super 35 by default). (0, 1e9].
-    double frame_width_mm = 24.89;
+    double width_mm = 24.89;
     /// Selects the grain pattern and every random outcome.
     uint64_t seed = 0;
     /// Frame number within a sequence; unset: a single image, whose grain

@@ -34,7 +34,7 @@ std::vector<LayerPlan> plan_of(const Stock& stock, const SceneSettings& scene, c
                                const RenderSettings& settings = {}, Roi roi = {})
 {
     FrameGeometry frame;
-    EXPECT_TRUE(FrameGeometry::make(scene.frame_width_mm, plate.view.width, plate.view.height,
+    EXPECT_TRUE(FrameGeometry::make(scene.width_mm, plate.view.width, plate.view.height,
                                     settings.scan_width, settings.scan_height, frame));
     if (roi.empty())
         roi = Roi { 0, 0, frame.scan_width, frame.scan_height };
@@ -59,7 +59,7 @@ TEST(EnginePlan, AnUnlitLayerGeneratesOnlyItsFogsGrainsWhereThatIsCheapest)
     Stock stock;
     ASSERT_TRUE(load_stock("color-negative", stock));
     SceneSettings scene;
-    scene.frame_width_mm = 1.2;
+    scene.width_mm = 1.2;
     const Plate black(48, 32, 0.0f, 0.0f, 0.0f);
     for (Engine engine : { Engine::automatic, Engine::fast }) {
         RenderSettings settings;
@@ -143,7 +143,7 @@ TEST(EnginePlan, TheNotesSayWhatTheKineticsChoosersFound)
     using Kind = PlanNotes::Kinetics::Kind;
     for (const auto& [width_mm, kind] :
          { std::pair { 0.2, Kind::table_refused }, std::pair { 24.89, Kind::table } }) {
-        scene.frame_width_mm = width_mm;
+        scene.width_mm = width_mm;
         for (const LayerPlan& plan : plan_of(stock, scene, grey)) {
             ASSERT_EQ(plan.notes.kinetics.size(), plan.populations.size());
             for (const PlanNotes::Kinetics& note : plan.notes.kinetics) {
@@ -158,7 +158,7 @@ TEST(EnginePlan, TheNotesSayWhatTheKineticsChoosersFound)
             EXPECT_FALSE(plan.notes.fog_alone);
         }
     }
-    scene.frame_width_mm = 1.2;
+    scene.width_mm = 1.2;
     // Sizes that change the rates: no table for any population, said so
     // for each, in order.
     for (Layer& layer : stock.layers)
@@ -183,7 +183,7 @@ TEST(EnginePlan, OnlyTheUnlitLayersTakeTheFogPath)
     stock.layers[1].sensitivity = { 0.0, 1.0, 0.0 };
     stock.layers[2].sensitivity = { 0.0, 0.0, 1.0 };
     SceneSettings scene;
-    scene.frame_width_mm = 1.2;
+    scene.width_mm = 1.2;
     const Plate red(48, 32, 0.18f, 0.0f, 0.0f);
     const std::vector<LayerPlan> plan = plan_of(stock, scene, red);
     EXPECT_FALSE(plan[0].unlit);
@@ -206,7 +206,7 @@ TEST(EnginePlan, FramesAndSeedsShareOneDevelopTable)
     const Plate grey(48, 32, 0.18f, 0.18f, 0.18f);
     const auto tables = [&](uint64_t seed, int64_t frame) {
         SceneSettings scene;
-        scene.frame_width_mm = 1.2;
+        scene.width_mm = 1.2;
         scene.seed           = seed;
         scene.frame          = frame;
         std::vector<std::string> out;

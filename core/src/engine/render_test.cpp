@@ -23,7 +23,7 @@ TestScene small_scene()
 {
     TestScene s;
     EXPECT_TRUE(load_stock("color-negative", s.stock));
-    s.scene.frame_width_mm = 1.2;
+    s.scene.width_mm = 1.2;
     const int w = 48, h = 32;
     s.pixels.resize(w * h * 3);
     for (int y = 0; y < h; ++y)
@@ -528,7 +528,7 @@ TEST(Render, PixelModelsFromTheCacheAreTheRendersOwn)
         [](TestScene& v) { v.stock.layers[0].populations[0].quantum_efficiency *= 1.5; });
     add("rates (table)", base,
         [](TestScene& v) { v.stock.layers[0].populations[0].k_loss_per_s *= 1e4; });
-    add("frame width (pitch)", base, [](TestScene& v) { v.scene.frame_width_mm = 1.3; });
+    add("frame width (pitch)", base, [](TestScene& v) { v.scene.width_mm = 1.3; });
     add("max density", base, [](TestScene& v) { v.stock.max_density = 0.4; });
     add("inhibition", base, [&](TestScene& v) { inhibit(v, 0.3); });
     add("inhibition strength", inhibited, [&](TestScene& v) { inhibit(v, 0.6); });

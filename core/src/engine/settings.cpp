@@ -15,11 +15,11 @@ namespace filmgrain {
 Status SceneSettings::validate() const
 {
     if (!std::isfinite(exposure_stops) || exposure_stops < -64.0 || exposure_stops > 64.0)
-        return Status::errorf("exposure = ", exposure_stops, " stops: must be in [-64, 64]");
+        return Status::errorf("exposure_stops = ", exposure_stops, ": must be in [-64, 64]");
     if (!std::isfinite(shutter_s) || shutter_s <= 0.0 || shutter_s > 1e7)
-        return Status::errorf("shutter = ", shutter_s, " s: must be in (0, 1e7]");
-    if (!std::isfinite(frame_width_mm) || frame_width_mm <= 0.0 || frame_width_mm > 1e9)
-        return Status::errorf("width_mm = ", frame_width_mm, ": must be in (0, 1e9]");
+        return Status::errorf("shutter_s = ", shutter_s, ": must be in (0, 1e7]");
+    if (!std::isfinite(width_mm) || width_mm <= 0.0 || width_mm > 1e9)
+        return Status::errorf("width_mm = ", width_mm, ": must be in (0, 1e9]");
     if (frame && (*frame < -kMaxFrameNumber || *frame > kMaxFrameNumber))
         return Status::errorf("frame = ", *frame, ": must be in [", -kMaxFrameNumber, ", ",
                               kMaxFrameNumber, "]");
@@ -175,7 +175,7 @@ Status RenderSettings::validate() const
 Status frame_geometry(const SceneSettings& scene, int64_t input_width, int64_t input_height,
                       const RenderSettings& settings, FrameGeometry& out)
 {
-    return FrameGeometry::make(scene.frame_width_mm, input_width, input_height,
+    return FrameGeometry::make(scene.width_mm, input_width, input_height,
                                settings.scan_width, settings.scan_height, out,
                                settings.scan_reference);
 }

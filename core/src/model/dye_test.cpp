@@ -253,7 +253,7 @@ TestScene dye_scene(CloudProfile profile, double ratio, double density, float va
     TestScene s;
     EXPECT_TRUE(load_stock("paper", s.stock));
     make_dye(s.stock.layers[0], profile, ratio, density);
-    s.scene.frame_width_mm = 1.2;
+    s.scene.width_mm = 1.2;
     s.pixels.assign(96 * 96, value);
     s.view = ImageView { s.pixels.data(), 96, 96, 1 };
     return s;

@@ -17,7 +17,7 @@ namespace filmgrain {
 /// Incident photons per square micrometre per lux-second at 555 nm.
 inline constexpr double kPhotonsPerUm2PerLxs = 4.09e3;
 
-/// log2(10): stops per decade of exposure (exposure= is in stops, log H in
+/// log2(10): stops per decade of exposure (exposure_stops counts stops, log H
 /// decades).
 inline constexpr double kStopsPerDecade = 3.3219280948873623;
 

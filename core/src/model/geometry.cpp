@@ -21,12 +21,12 @@ constexpr double kGrainsPerCell = 16.0;
 
 }  // namespace
 
-Status FrameGeometry::make(double frame_width_mm, int64_t input_width, int64_t input_height,
+Status FrameGeometry::make(double width_mm, int64_t input_width, int64_t input_height,
                            int64_t scan_width, int64_t scan_height, FrameGeometry& out,
                            const Roi& reference)
 {
-    if (!std::isfinite(frame_width_mm) || frame_width_mm <= 0.0 || frame_width_mm > 1e9)
-        return Status::errorf("width_mm = ", frame_width_mm, ": must be in (0, 1e9]");
+    if (!std::isfinite(width_mm) || width_mm <= 0.0 || width_mm > 1e9)
+        return Status::errorf("width_mm = ", width_mm, ": must be in (0, 1e9]");
     if (input_width <= 0 || input_height <= 0)
         return Status::errorf("input image is ", input_width, "x", input_height,
                               ": must have at least one pixel");
@@ -39,7 +39,7 @@ Status FrameGeometry::make(double frame_width_mm, int64_t input_width, int64_t i
                               ref.y_begin, ", ", ref.y_end, ") lies outside the ", input_width,
                               "x", input_height, " input");
     FrameGeometry g;
-    g.width_um       = um_from_mm(frame_width_mm);
+    g.width_um       = um_from_mm(width_mm);
     g.input_width    = input_width;
     g.input_height   = input_height;
     g.input_pitch_um = g.width_um / static_cast<double>(input_width);

@@ -49,7 +49,7 @@ struct FrameGeometry {
     /// follow the reference's aspect ratio. `reference`: empty for the
     /// whole input. Fails on non-positive or non-finite sizes and on a
     /// reference that is not inside the input.
-    static Status make(double frame_width_mm, int64_t input_width, int64_t input_height,
+    static Status make(double width_mm, int64_t input_width, int64_t input_height,
                        int64_t scan_width, int64_t scan_height, FrameGeometry& out,
                        const Roi& reference = {});
 

@@ -73,7 +73,7 @@ TestScene edge_scene(double strength, double sigma_um, int64_t rows)
     if (strength > 0.0)
         s.stock.inhibition = { { strength } };
     s.stock.inhibitor_diffusion_um = sigma_um;
-    s.scene.frame_width_mm          = 2.4;
+    s.scene.width_mm               = 2.4;
     const int64_t w = kWidth, h = rows;
     s.pixels.resize(static_cast<size_t>(w * h));
     for (int64_t y = 0; y < h; ++y)

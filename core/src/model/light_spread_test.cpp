@@ -663,7 +663,7 @@ TestScene point_light_scene()
     red.halation_radius_um = 200.0;
     red.scatter            = 0.2;
     red.scatter_sigma_um   = 4.0;
-    s.scene.frame_width_mm = 1.2;
+    s.scene.width_mm = 1.2;
     const int64_t n        = 96;
     s.pixels               = block_image(n, n, static_cast<float>(0.18 / 64), n / 2, n / 2, 1,
                                          static_cast<float>(0.18 * 4096));

@@ -11,7 +11,7 @@
 namespace filmgrain {
 
 /// A finite decimal number, fully consumed. An optional leading '+' is
-/// accepted (exposure=+1). On failure `why` says what is wrong and `out`
+/// accepted (exposure_stops=+1). On failure `why` says what is wrong and `out`
 /// is unchanged.
 bool parse_decimal(std::string_view s, double& out, std::string& why);
 

@@ -57,7 +57,7 @@ struct FilmgrainOptions {
 
     /// The shot (SceneSettings, declared once in filmgrain/render.h with
     /// their defaults and ranges): exposure_stops, shutter_s,
-    /// frame_width_mm, seed, frame, static_grain, edge.
+    /// width_mm, seed, frame, static_grain, edge.
     SceneSettings scene;
 
     /// The simulation engine and its knobs (EngineOptions, declared once in
@@ -104,7 +104,7 @@ namespace IBA {
 ///   3 channels (R, G, B first; alpha and any further channels are ignored).
 ///   2-channel images are an error. Any pixel type (converted to float). The
 ///   film frame covers src's display (full) window (its data window when no
-///   display window is set): opts.scene.frame_width_mm across it, square
+///   display window is set): opts.scene.width_mm across it, square
 ///   pixels; pixels outside the data window are black. The negative covers
 ///   the data window, scaled to the scan and rounded outward to whole scan
 ///   pixels (MODEL.md 2): smaller than the display window (a crop, a CG
@@ -127,7 +127,7 @@ namespace IBA {
 ///   a frame of a sequence) and filmgrain:static (int, likewise),
 ///   filmgrain:grain_seed (decimal: the seed the grain was drawn from,
 ///   grain_seed(scene)), filmgrain:exposure_stops (float),
-///   filmgrain:shutter_s (float), filmgrain:frame_width_mm (float),
+///   filmgrain:shutter_s (float), filmgrain:width_mm (float),
 ///   filmgrain:engine, filmgrain:version.
 /// roi: scan pixels to render (default: the data window's scan). Must lie
 ///   inside the scan pixels over the film (the box around the display and

@@ -41,7 +41,7 @@ int main()
     // The operator with the default stock on a 0.3 mm wide frame (few
     // grains: fast).
     filmgrain::FilmgrainOptions opts;
-    opts.scene.frame_width_mm = 0.3;
+    opts.scene.width_mm = 0.3;
     OIIO::ImageBuf neg = filmgrain::IBA::filmgrain(src, opts);
     if (neg.has_error())
         return fail("IBA::filmgrain: " + neg.geterror());
