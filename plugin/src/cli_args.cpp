@@ -606,14 +606,14 @@ std::string help_text()
 
     out << "\nTable cache:\n";
     append_wrapped(out, "    ",
-                   "The P(develop | N photons) tables that auto builds (seconds a stock) are "
-                   "kept on disk for the next run: in $FILMGRAIN_CACHE_DIR/tables, else "
-                   "$XDG_CACHE_HOME/filmgrain/tables, else ~/.cache/filmgrain/tables "
-                   "(FILMGRAIN_CACHE_DIR=off: none). A run reads a table only if it was "
-                   "built by the same table code, compiler and flags; the pixels are the "
-                   "same read or built. Delete the directory to clear it. Now: "
-                   + (table_cache_dir().empty() ? std::string("off")
-                                                 : table_cache_dir() + "/tables")
+                   "The P(develop | N photons) tables that auto builds (seconds a stock) and "
+                   "the pixel scale's statistics (about a second a layer of a 4K frame) are "
+                   "kept on disk for the next run: in $FILMGRAIN_CACHE_DIR/tables and "
+                   "/pixel-models, else under $XDG_CACHE_HOME/filmgrain, else under "
+                   "~/.cache/filmgrain (FILMGRAIN_CACHE_DIR=off: none). A run reads a file "
+                   "only if it was built by the same code, compiler and flags; the pixels "
+                   "are the same read or built. Delete the directory to clear it. Now: "
+                   + (table_cache_dir().empty() ? std::string("off") : table_cache_dir())
                    + ".");
 
     out << "\nColour:\n";

@@ -413,3 +413,34 @@ def test_tables_kept_on_disk_for_the_next_process(run, tmp_path):
             env=clean_env(FILMGRAIN_CACHE_DIR="off", XDG_CACHE_HOME=str(off)))
     assert r.returncode == 0, r.stderr
     assert not off.exists()
+
+
+def test_pixel_models_kept_on_disk_for_the_next_process(run, tmp_path):
+    """A layer's pixel model (its pixel statistics, seconds of a frame's
+    setup) is read by the next process as the tables are: the same pixels,
+    the file untouched; a damaged file is ignored and written again."""
+    def pixel_bytes(path):
+        e = Exr(path)
+        return b"".join(e.channels[n].tobytes() for n in e.names)
+
+    cache = tmp_path / "cache"
+    env = clean_env(FILMGRAIN_CACHE_DIR=str(cache))
+    args = ["--wedge", "--filmgrain:scale=pixel:scan=240x24"]
+    r = run(*args, "-o", tmp_path / "p0.exr", env=env)
+    assert r.returncode == 0, r.stderr
+    models = sorted((cache / "pixel-models").glob("pixel-model-*.bin"))
+    assert len(models) == 3, sorted(cache.rglob("*"))  # one a layer of vision3-500t
+    assert not list((cache / "pixel-models").glob("*.tmp-*"))
+    originals = {m: m.read_bytes() for m in models}
+    stamps = {m: (m.stat().st_ino, m.stat().st_mtime_ns) for m in models}
+    r = run(*args, "-o", tmp_path / "p1.exr", env=env)
+    assert r.returncode == 0, r.stderr
+    assert {m: (m.stat().st_ino, m.stat().st_mtime_ns) for m in models} == stamps
+    assert pixel_bytes(tmp_path / "p1.exr") == pixel_bytes(tmp_path / "p0.exr")
+    for m in models:
+        b = m.read_bytes()
+        m.write_bytes(b[: len(b) // 2] + bytes([b[len(b) // 2] ^ 1]) + b[len(b) // 2 + 1:])
+    r = run(*args, "-o", tmp_path / "p2.exr", env=env)
+    assert r.returncode == 0, r.stderr
+    assert pixel_bytes(tmp_path / "p2.exr") == pixel_bytes(tmp_path / "p0.exr")
+    assert {m: m.read_bytes() for m in models} == originals

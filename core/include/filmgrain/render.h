@@ -311,8 +311,9 @@ struct RenderStats {
 Status render_negative(const Stock& stock, const SceneSettings& scene, const ImageView& input,
                        const RenderSettings& settings, float* density, RenderStats* stats);
 
-/// The directory of the on-disk cache of P(develop | N) tables (kept for
-/// other processes; core/src/engine/kinetics_table.h): $FILMGRAIN_CACHE_DIR if set
+/// The directory of the on-disk cache of P(develop | N) tables and pixel
+/// models (kept for other processes; core/src/engine/kinetics_table.h,
+/// shared_pixel_model in engine_plan.cpp): $FILMGRAIN_CACHE_DIR if set
 /// ("" or "off": no disk cache), else $XDG_CACHE_HOME/filmgrain, else
 /// $HOME/.cache/filmgrain; "" when none (or when this build has no table
 /// code id). Read from the environment at every call.

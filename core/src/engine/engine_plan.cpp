@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "model/dye.h"
@@ -18,6 +19,7 @@
 #include "model/inhibition.h"
 #include "model/light_spread.h"
 #include "util/parallel.h"
+#include "util/cache_file.h"
 #include "util/process_cache.h"
 #include "util/rng.h"
 #include "util/sampling.h"
@@ -105,6 +107,48 @@ ProcessCache<std::string, PixelModel>& pixel_model_cache()
     return cache;
 }
 
+#ifdef FILMGRAIN_PIXEL_MODEL_CODE_ID
+/// A pixel model's cache file starts with the format, the build's pixel
+/// model code id and the model's whole key (so a file is read only for
+/// this key, by a build of the same code, compiler and flags).
+std::string pixel_model_file_header(const std::string& key)
+{
+    return std::string("filmgrain pixel model 1\n") + FILMGRAIN_PIXEL_MODEL_CODE_ID + '\n' + key;
+}
+#endif
+
+/// The pixel model kept on disk for `key` (table_cache_dir()/pixel-models,
+/// cache_file.h), or null.
+std::shared_ptr<const PixelModel> read_cached_pixel_model(const std::string& key)
+{
+#ifdef FILMGRAIN_PIXEL_MODEL_CODE_ID
+    const std::string dir = table_cache_dir();
+    if (dir.empty())
+        return nullptr;
+    const std::string header = pixel_model_file_header(key);
+    const std::optional<std::string> body
+        = read_cache_file(cache_file_path(dir, "pixel-models", "pixel-model", header), header);
+    return body ? PixelModel::deserialize(*body) : nullptr;
+#else
+    (void)key;
+    return nullptr;
+#endif
+}
+
+void write_cached_pixel_model(const std::string& key, const PixelModel& model)
+{
+#ifdef FILMGRAIN_PIXEL_MODEL_CODE_ID
+    const std::string dir = table_cache_dir();
+    if (dir.empty())
+        return;
+    const std::string header = pixel_model_file_header(key);
+    write_cache_file(cache_file_path(dir, "pixel-models", "pixel-model", header), header,
+                     model.serialize());
+#else
+    (void)key, (void)model;
+#endif
+}
+
 /// The layer's pixel model (PixelModel's arguments), built once per
 /// process for the same arguments: a sequence's frames share it, as they
 /// share their tables. It depends on the stock, scene and scan, never on
@@ -114,7 +158,8 @@ ProcessCache<std::string, PixelModel>& pixel_model_cache()
 /// limit and photons per value, its table's serialization and its curve's
 /// extent, the image,
 /// the pitch, the log-factor range and the density clamp), compared in
-/// full.
+/// full. Kept on disk too, as the tables are (kinetics_table.h): another
+/// process (a farm's next frame) reads it instead of building it.
 std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopulation>& pops,
                                                      double px_um, double py_um,
                                                      const Layer& layer,
@@ -148,8 +193,12 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
     }
     if (std::shared_ptr<const PixelModel> kept = pixel_model_cache().find(key))
         return kept;
-    auto model = std::make_shared<const PixelModel>(pops, px_um, py_um, image, max_log_factor,
-                                                    nthreads, max_density);
+    std::shared_ptr<const PixelModel> model = read_cached_pixel_model(key);
+    if (!model) {
+        model = std::make_shared<const PixelModel>(pops, px_um, py_um, image, max_log_factor,
+                                                   nthreads, max_density);
+        write_cached_pixel_model(key, *model);
+    }
     pixel_model_cache().put(std::move(key), model);
     return model;
 }

@@ -5,13 +5,10 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
-#include <iterator>
 #include <limits>
-#include <sstream>
+#include <optional>
 #include <thread>
 #include <tuple>
 #include <type_traits>
@@ -23,7 +20,8 @@
 #include "util/parallel.h"
 #include "util/process_cache.h"
 #include "util/rng.h"
-#include "util/whole_file.h"
+#include "util/bytes.h"
+#include "util/cache_file.h"
 
 namespace filmgrain {
 
@@ -229,49 +227,6 @@ DevelopTable::DevelopTable(const KineticsRates& rates, double shutter_s, const D
 
 namespace {
 
-/// Plain values appended to / read from a byte string (this machine's
-/// representation: a cache file is read where it was written, and its
-/// code id names the build).
-struct Bytes {
-    std::string data;
-    size_t at = 0;
-    bool ok   = true;
-    template<typename T> void put(const T& v)
-    {
-        static_assert(std::is_trivially_copyable_v<T>);
-        data.append(reinterpret_cast<const char*>(&v), sizeof v);
-    }
-    template<typename T> void put(const std::vector<T>& v)
-    {
-        put(static_cast<uint64_t>(v.size()));
-        for (const T& x : v)
-            put(x);
-    }
-    template<typename T> T get()
-    {
-        T v {};
-        if (!ok || data.size() - at < sizeof v) {
-            ok = false;
-            return v;
-        }
-        std::memcpy(&v, data.data() + at, sizeof v);
-        at += sizeof v;
-        return v;
-    }
-    template<typename T> std::vector<T> get_vector()
-    {
-        const uint64_t n = get<uint64_t>();
-        if (!ok || n > (data.size() - at) / sizeof(T)) {
-            ok = false;
-            return {};
-        }
-        std::vector<T> v(static_cast<size_t>(n));
-        for (T& x : v)
-            x = get<T>();
-        return v;
-    }
-};
-
 /// What of the options decides a table's contents (not threads, budget or
 /// the cancel flag), in a fixed order.
 void put_options(Bytes& b, const DevelopTable::Options& o)
@@ -399,27 +354,15 @@ std::string table_file_header(const KineticsRates& rates, double shutter_s,
     return std::move(b.data);
 }
 
-/// FNV-1a over the bytes: a cache file's check (not a defence against
-/// anyone, a guard against a damaged file).
-uint64_t content_hash(const std::string& bytes)
-{
-    uint64_t h = 0xcbf29ce484222325ull;
-    for (unsigned char c : bytes)
-        h = (h ^ c) * 0x100000001b3ull;
-    return h;
-}
-
 /// The cache file of a table: named by a hash of its header and options
-/// (a collision only costs a rebuild: the file's bytes are compared).
+/// (a collision only costs a rebuild: the file's header is compared, and
+/// the table's own bytes hold its options).
 std::filesystem::path table_file(const std::string& dir, const std::string& header,
                                  const DevelopTable::Options& options)
 {
     Bytes b;
     put_options(b, options);
-    const size_t h = std::hash<std::string>()(header + b.data);
-    std::ostringstream name;
-    name << "table-" << std::hex << h << ".bin";
-    return std::filesystem::path(dir) / "tables" / name.str();
+    return cache_file_path(dir, "tables", "table", header + b.data);
 }
 #endif
 
@@ -432,20 +375,9 @@ std::shared_ptr<const DevelopTable> read_cached_table(const KineticsRates& rates
     if (dir.empty())
         return nullptr;
     const std::string header = table_file_header(rates, shutter_s, dev);
-    std::ifstream in(table_file(dir, header, options), std::ios::binary);
-    if (!in)
-        return nullptr;
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    // Header, table, and a hash of both (a damaged file is not read).
-    if (bytes.size() < header.size() + sizeof(uint64_t)
-        || bytes.compare(0, header.size(), header) != 0)
-        return nullptr;
-    const size_t body = bytes.size() - sizeof(uint64_t);
-    uint64_t check    = 0;
-    std::memcpy(&check, bytes.data() + body, sizeof check);
-    if (check != content_hash(bytes.substr(0, body)))
-        return nullptr;
-    return DevelopTable::deserialize(bytes.substr(header.size(), body - header.size()), options);
+    const std::optional<std::string> body
+        = read_cache_file(table_file(dir, header, options), header);
+    return body ? DevelopTable::deserialize(*body, options) : nullptr;
 #else
     (void)rates, (void)shutter_s, (void)dev, (void)options;
     return nullptr;
@@ -459,18 +391,8 @@ void write_cached_table(const KineticsRates& rates, double shutter_s, const Deve
     const std::string dir = table_cache_dir();
     if (dir.empty())
         return;
-    // Best effort: a cache that cannot be written only costs the next
-    // process a build. Written whole (util/whole_file.h).
-    std::error_code ec;
-    const std::string header    = table_file_header(rates, shutter_s, dev);
-    const std::filesystem::path path = table_file(dir, header, table.options());
-    std::filesystem::create_directories(path.parent_path(), ec);
-    if (ec)
-        return;
-    std::string bytes    = header + table.serialize();
-    const uint64_t check = content_hash(bytes);
-    bytes.append(reinterpret_cast<const char*>(&check), sizeof check);
-    (void)write_whole_file(path, bytes);
+    const std::string header = table_file_header(rates, shutter_s, dev);
+    write_cache_file(table_file(dir, header, table.options()), header, table.serialize());
 #else
     (void)rates, (void)shutter_s, (void)dev, (void)table;
 #endif

@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "model/dye.h"
+#include "util/bytes.h"
 #include "util/parallel.h"
 #include "util/rng.h"
 #include "util/sampling.h"
@@ -526,6 +527,53 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
     });
     for (double e : copula_error)
         m_max_copula_error = std::max(m_max_copula_error, e);
+}
+
+std::string PixelModel::serialize() const
+{
+    static_assert(std::is_trivially_copyable_v<Moments> && std::is_trivially_copyable_v<Node>);
+    Bytes b;
+    b.put(m_log_v0);
+    b.put(m_inv_step);
+    b.put(static_cast<uint64_t>(m_rows.size()));
+    for (size_t r = 0; r < m_rows.size(); ++r) {
+        b.put(m_rows[r]);
+        b.put(m_nodes[r]);
+    }
+    b.put(m_lags);
+    b.put(m_max_dropped);
+    b.put(m_max_copula_error);
+    b.put(m_max_mean_error);
+    b.put(m_max_sd_error);
+    return std::move(b.data);
+}
+
+std::shared_ptr<const PixelModel> PixelModel::deserialize(const std::string& bytes)
+{
+    Bytes b;
+    b.data = bytes;
+    std::shared_ptr<PixelModel> m(new PixelModel());
+    m->m_log_v0         = b.get<double>();
+    m->m_inv_step       = b.get<double>();
+    const uint64_t rows = b.get<uint64_t>();
+    if (!b.ok || rows == 0 || rows > bytes.size())
+        return nullptr;
+    for (uint64_t r = 0; r < rows && b.ok; ++r) {
+        m->m_rows.push_back(b.get_vector<Moments>());
+        m->m_nodes.push_back(b.get_vector<Node>());
+        // Every row as long as the first, each node beside its moments.
+        if (m->m_rows.back().size() < 2 || m->m_nodes.back().size() != m->m_rows.back().size()
+            || m->m_rows.back().size() != m->m_rows.front().size())
+            return nullptr;
+    }
+    m->m_lags             = b.get<int>();
+    m->m_max_dropped      = b.get<double>();
+    m->m_max_copula_error = b.get<double>();
+    m->m_max_mean_error   = b.get<double>();
+    m->m_max_sd_error     = b.get<double>();
+    if (!b.done() || m->m_lags > kMaxLag)
+        return nullptr;
+    return m;
 }
 
 PixelModel::Position PixelModel::position(double v, double log_factor) const

@@ -30,6 +30,8 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "expect/develop_curve.h"
@@ -183,7 +185,16 @@ public:
     double max_mean_error() const { return m_max_mean_error; }
     double max_sd_error() const { return m_max_sd_error; }
 
+    /// The whole table as bytes (this machine's representation: for the
+    /// on-disk cache, read back by a build of the same code only), and a
+    /// model from them, equal to the one serialized in every value; null
+    /// where the bytes are not a whole model.
+    std::string serialize() const;
+    static std::shared_ptr<const PixelModel> deserialize(const std::string& bytes);
+
 private:
+    PixelModel() = default;
+
     /// A node as drawn: the logarithms of its mean and variance (the
     /// table interpolates them), its filter.
     struct Node {

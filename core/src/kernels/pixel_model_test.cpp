@@ -565,5 +565,35 @@ TEST(PixelModel, SamplesAreTileIndependent)
             EXPECT_EQ(part[y * 16 + x], whole[(y + 16) * 32 + x + 16]);
 }
 
+// The on-disk cache's form: a model read back from its bytes draws the
+// same pixels bit for bit, inhibited (two axes) or not; bytes cut short,
+// lengthened or not a model are refused.
+TEST(PixelModel, BytesGiveTheSameModel)
+{
+    const TestLayer t;
+    for (double max_log_factor : { 0.0, 0.3 }) {
+        const PixelModel model(t.pops, 4.0, 4.0, ImageOverlap(), max_log_factor);
+        const std::string bytes = model.serialize();
+        const std::shared_ptr<const PixelModel> back = PixelModel::deserialize(bytes);
+        ASSERT_TRUE(back) << max_log_factor;
+        EXPECT_EQ(back->serialize(), bytes);
+        EXPECT_EQ(back->lags(), model.lags());
+        EXPECT_EQ(back->max_mean_error(), model.max_mean_error());
+        std::vector<double> v(24 * 24), log_factor(v.size()), a(v.size()), b(v.size());
+        for (size_t i = 0; i < v.size(); ++i) {
+            v[i]          = 0.02 * static_cast<double>(i % 89);
+            log_factor[i] = max_log_factor * static_cast<double>(i % 7) / 6.0;
+        }
+        sample_pixel_transmittance(model, 3, 0, 0, 24, 24, v.data(), log_factor.data(), a.data());
+        sample_pixel_transmittance(*back, 3, 0, 0, 24, 24, v.data(), log_factor.data(), b.data());
+        EXPECT_EQ(a, b) << max_log_factor;
+        EXPECT_FALSE(PixelModel::deserialize(bytes.substr(0, bytes.size() - 1)));
+        EXPECT_FALSE(PixelModel::deserialize(bytes + "x"));
+        EXPECT_FALSE(PixelModel::deserialize(bytes.substr(0, bytes.size() / 2)));
+    }
+    EXPECT_FALSE(PixelModel::deserialize(""));
+    EXPECT_FALSE(PixelModel::deserialize(std::string(64, '\xff')));
+}
+
 }  // namespace
 }  // namespace filmgrain
