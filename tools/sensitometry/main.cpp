@@ -23,6 +23,9 @@
 #include "util/parse_number.h"
 #include "analysis.h"
 #include "expect/boolean_model.h"
+#include "model/development.h"
+#include "model/geometry.h"
+#include "model/image_formation.h"
 #include "filmgrain/render.h"
 #include "filmgrain/wedge.h"
 #include "granularity.h"
@@ -407,12 +410,11 @@ private:
             // MODEL.md 4: unexposed grains develop with f = 1 - exp(-t / fog_tau),
             // so the fog density is 0.434 n E[a] f (Boolean model: -log10 of
             // exp(-n E[a] f)) plus the base.
-            const auto& pop    = stock.layers[0].populations[0];
-            const double ea    = M_PI / 4.0 * pop.diameter_um * pop.diameter_um
-                              * std::exp(pop.diameter_log_sigma * pop.diameter_log_sigma);
-            const double f     = -std::expm1(-t / stock.fog_tau_s);
+            const auto& pop = stock.layers[0].populations[0];
             const double model_fog
-                = pop.grains_per_um2 * ea * f / std::log(10.0) + stock.layer_base_density(0);
+                = filmgrain::kLog10E * pop.grains_per_um2 * filmgrain::mean_disc_area_um2(pop)
+                      * filmgrain::Development(stock).fog_probability()
+                  + stock.layer_base_density(0);
             table.row(c.engine, t, m.gamma, m.gamma_se, l.fog_density, l.fog_density_se,
                       model_fog, m.speed_log10_h, m.d_max);
             json j = metrics_json(m);
