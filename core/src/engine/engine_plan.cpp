@@ -322,7 +322,7 @@ SpreadLight spread_light(const PlanContext& c)
         const Layer& layer = c.stock.layers[l];
         out.values[l]      = std::make_shared<const std::vector<float>>(spread_exposure(
             c.stock, layer, direct_exposure(c, l), c.input.frame_width(),
-            c.input.frame_height(), c.frame.input_pitch_um));
+            c.input.frame_height(), c.frame.input_pitch_um, c.spread_asked()));
         out.seconds[l] = seconds_since(t0);
     });
     return out;
@@ -356,7 +356,8 @@ Status plan_inhibitors(const PlanContext& c, const std::vector<LayerExposure>& e
         views.push_back(&e);
     if (Status s = plan_inhibition(c.stock, c.scene, views, c.input.frame_width(),
                                    c.input.frame_height(), c.frame.input_pitch_um,
-                                   c.settings.nthreads, inhibition, c.cancel);
+                                   c.settings.nthreads, inhibition, c.cancel,
+                                   c.spread_asked());
         !s)
         return s;
     seconds = seconds_since(t0);

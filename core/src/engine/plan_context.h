@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "engine/engine_plan.h"
+#include "model/light_spread.h"
 #include "model/image_formation.h"
 #include "model/inhibition.h"
 #include "util/parallel.h"
@@ -73,6 +74,12 @@ struct PlanContext {
     int workers;
 
     bool cancelled() const { return cancel_requested(cancel); }
+
+    /// How the frame's Gaussian spreads are convolved (MODEL.md 9, 10): by
+    /// FFT in the exact engine (the reference), directly elsewhere (the
+    /// same values to rounding, light_spread.h); spread_method() says what
+    /// a layer with or without a halo then runs.
+    SpreadMethod spread_asked() const { return exact ? SpreadMethod::fft : SpreadMethod::direct; }
     /// Film area of the whole scan and of the ROI, square micrometres, and
     /// their pixels: choices compare costs over the whole scan (so that a
     /// ROI decides as the full frame does); estimates are of the ROI.

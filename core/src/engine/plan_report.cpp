@@ -19,7 +19,9 @@ void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
 {
     const Layer& layer = c.stock.layers[l];
     if (plan.spread) {
-        path << "spread=fft ";
+        const bool direct = spread_method(c.spread_asked(), layer_halation(c.stock, layer).on())
+                            == SpreadMethod::direct;
+        path << (direct ? "spread=direct " : "spread=fft ");
         why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
             << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
             << " " << halation_kernel_name(layer.halation_kernel);
@@ -30,13 +32,16 @@ void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
                 << format_g(layer_halation(c.stock, layer).reach_um()) << " um)";
         else
             why << " radius " << format_g(layer.halation_radius_um) << " um";
-        why << ") over the whole frame, by its exact mean over each input pixel; ";
+        why << ") over the whole frame, by its exact mean over each input pixel ("
+            << (direct ? "a separable convolution" : "an FFT convolution") << "); ";
     }
     if (plan.inhibition) {
         path << "inhibition ";
         why << "development inhibited (MODEL.md 10: inhibitor diffusion "
-            << format_g(c.stock.inhibitor_diffusion_um)
-            << " um; expected densities from the expected curves, error of the log factor <= "
+            << format_g(c.stock.inhibitor_diffusion_um) << " um, "
+            << (c.spread_asked() == SpreadMethod::direct ? "a separable convolution"
+                                                         : "an FFT convolution")
+            << "; expected densities from the expected curves, error of the log factor <= "
             << format_g(inhibition.error) << "); ";
     }
     if (layer.image == LayerImage::dye) {

@@ -15,7 +15,7 @@ namespace filmgrain {
 Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
                        int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out,
-                       const std::atomic<bool>* cancel)
+                       const std::atomic<bool>* cancel, SpreadMethod method)
 {
     const auto cancelled = [cancel] { return cancel_requested(cancel); };
     out = InhibitionPlan {};
@@ -74,7 +74,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
         std::vector<double>& d = blurred[j];
         if (stock.inhibitor_diffusion_um > 0.0)
             d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
-                             stock.inhibitor_diffusion_um, HalationSpec(), scene.edge);
+                             stock.inhibitor_diffusion_um, HalationSpec(), scene.edge, method);
         for (double& v : d)
             v += fog[j];
     });

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "model/exposure.h"
+#include "model/light_spread.h"
 #include "filmgrain/expected_curve.h"
 #include "filmgrain/render.h"
 #include "filmgrain/status.h"
@@ -81,7 +82,8 @@ struct InhibitionPlan {
 Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
                        const std::vector<const LayerExposure*>& exposures, int64_t frame_width,
                        int64_t frame_height, double pitch_um, int nthreads, InhibitionPlan& out,
-                       const std::atomic<bool>* cancel = nullptr);
+                       const std::atomic<bool>* cancel = nullptr,
+                       SpreadMethod method = SpreadMethod::fft);
 
 /// MODEL.md 10 on a large uniform neutral patch: layer k's log factor
 /// sum_j inhibition[k][j] Dbar_j where layer k has exposure value `value`

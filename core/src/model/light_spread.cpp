@@ -607,9 +607,73 @@ PixelKernel base_halation_pixel_kernel(const BaseHalation& base, double pitch_um
     return k;
 }
 
+SpreadMethod spread_method(SpreadMethod asked, bool halo)
+{
+    return halo ? SpreadMethod::fft : asked;
+}
+
+namespace {
+
+/// G * V by the separable pixel weights `g` of one axis, along rows then
+/// columns; beyond the frame the nearest edge value (clamp) or nothing
+/// (gate). Each output sums its taps in order, a row at a time (so the
+/// compiler may vectorise across the row without reordering a sum). The
+/// rows convolved along x live in a ring of the 2 reach + 1 that a row of
+/// the output reads: the memory is the output's and a few rows'.
+std::vector<double> separable_convolution(const std::vector<double>& values, int64_t w,
+                                          int64_t h, const PixelKernel& g, FrameEdge edge)
+{
+    const int64_t r = g.reach, taps = 2 * r + 1;
+    const double* k = g.weights.data();
+    std::vector<double> ring(static_cast<size_t>(taps * w));
+    std::vector<double> line(static_cast<size_t>(w + 2 * r));
+    // Row yy of the frame convolved along x, into its ring slot.
+    const auto convolve_row = [&](int64_t yy) {
+        const double* in = values.data() + yy * w;
+        for (int64_t x = -r; x < w + r; ++x)
+            line[static_cast<size_t>(x + r)]
+                = x >= 0 && x < w ? in[x]
+                  : edge == FrameEdge::clamp ? in[std::clamp<int64_t>(x, 0, w - 1)]
+                                             : 0.0;
+        double* out = ring.data() + (yy % taps) * w;
+        std::fill(out, out + w, 0.0);
+        for (int64_t t = 0; t < taps; ++t) {
+            const double kt   = k[t];
+            const double* src = line.data() + t;
+            for (int64_t x = 0; x < w; ++x)
+                out[x] += kt * src[x];
+        }
+    };
+    for (int64_t yy = 0; yy < std::min(h, r); ++yy)
+        convolve_row(yy);
+    std::vector<double> out(values.size(), 0.0);
+    for (int64_t y = 0; y < h; ++y) {
+        // Rows up to y + r are in the ring (those below y - r left it).
+        if (y + r < h)
+            convolve_row(y + r);
+        double* o = out.data() + y * w;
+        for (int64_t t = 0; t < taps; ++t) {
+            int64_t yy = y - r + t;
+            if (yy < 0 || yy >= h) {
+                if (edge == FrameEdge::gate)
+                    continue;
+                yy = std::clamp<int64_t>(yy, 0, h - 1);
+            }
+            const double kt   = k[t];
+            const double* src = ring.data() + (yy % taps) * w;
+            for (int64_t x = 0; x < w; ++x)
+                o[x] += kt * src[x];
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
 std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
-                                 double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge)
+                                 double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge,
+                                 SpreadMethod method)
 {
     const int64_t w = frame_width, h = frame_height;
     const bool scattering = scatter > 0.0 && scatter_sigma_um > 0.0;
@@ -644,6 +708,15 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
     PixelKernel g, k;
     if (scattering)
         g = gaussian_pixel_kernel(scatter_sigma_um, pitch_um);
+    if (spread_method(method, haloing) == SpreadMethod::direct) {
+        // The part that stays, plus the spread part s (G * V), as below.
+        if (!scattering)
+            return values;
+        std::vector<double> out = separable_convolution(values, w, h, g, edge);
+        for (size_t i = 0; i < out.size(); ++i)
+            out[i] = (1.0 - s) * values[i] + std::max(0.0, s * out[i]);
+        return out;
+    }
     if (base)
         k = base_halation_pixel_kernel(BaseHalation(halo.base_thickness_um,
                                                     halo.base_refractive_index, halo.rear_face),
@@ -725,7 +798,7 @@ std::vector<double> spread_frame(const std::vector<double>& values, int64_t fram
 
 std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
                                    const LayerExposure& exposure, int64_t frame_width,
-                                   int64_t frame_height, double pitch_um)
+                                   int64_t frame_height, double pitch_um, SpreadMethod method)
 {
     std::vector<double> values(static_cast<size_t>(frame_width * frame_height));
     for (int64_t y = 0; y < frame_height; ++y)
@@ -733,7 +806,8 @@ std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
             values[static_cast<size_t>(y * frame_width + x)] = exposure.value(x, y);
     const std::vector<double> spread
         = spread_frame(values, frame_width, frame_height, pitch_um, layer.scatter,
-                       layer.scatter_sigma_um, layer_halation(stock, layer), exposure.edge());
+                       layer.scatter_sigma_um, layer_halation(stock, layer), exposure.edge(),
+                       method);
     std::vector<float> out(spread.size());
     for (size_t i = 0; i < spread.size(); ++i)
         out[i] = static_cast<float>(std::min<double>(spread[i], std::numeric_limits<float>::max()));

@@ -146,6 +146,18 @@ struct HalationSpec {
 /// Layer `layer` of `stock`'s halation.
 HalationSpec layer_halation(const Stock& stock, const Layer& layer);
 
+/// How spread_frame convolves. fft: the reference (the exact engine's):
+/// one FFTW transform of the frame and its margin. direct: for the
+/// Gaussian alone (no halo): a separable convolution with the same pixel
+/// weights, along rows then columns, each sum taken in tap order: the
+/// same values to rounding (the largest difference is measured in
+/// light_spread_test), several times cheaper on a large frame; with a halo
+/// spread_frame takes the fft whatever is asked.
+enum class SpreadMethod { fft, direct };
+/// What spread_frame runs for these settings: direct only where asked and
+/// there is no halo.
+SpreadMethod spread_method(SpreadMethod asked, bool halo);
+
 /// The exposure value of a layer after its scatter and halation
 /// (MODEL.md 9): H_s = (1 - scatter) H + scatter (G * H), then
 /// H' = H_s + halation (K * H_s), over the whole input frame
@@ -165,7 +177,8 @@ HalationSpec layer_halation(const Stock& stock, const Layer& layer);
 /// the ROI or the thread count.
 std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
                                    const LayerExposure& exposure, int64_t frame_width,
-                                   int64_t frame_height, double pitch_um);
+                                   int64_t frame_height, double pitch_um,
+                                   SpreadMethod method = SpreadMethod::fft);
 
 /// The convolution itself, on any frame of values (w x h, row by row;
 /// beyond the frame the nearest edge value (`edge` clamp) or 0 (gate)):
@@ -178,7 +191,7 @@ std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
 std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
                                  double scatter_sigma_um, const HalationSpec& halation,
-                                 FrameEdge edge);
+                                 FrameEdge edge, SpreadMethod method = SpreadMethod::fft);
 
 /// A transform length >= n with no prime factor above 7 (FFTW is fast on
 /// those).
