@@ -614,19 +614,21 @@ SpreadMethod spread_method(SpreadMethod asked, bool halo)
 
 namespace {
 
-/// G * V by the separable pixel weights `g` of one axis, along rows then
-/// columns; beyond the frame the nearest edge value (clamp) or nothing
-/// (gate). Each output sums its taps in order, a row at a time (so the
-/// compiler may vectorise across the row without reordering a sum). The
-/// rows convolved along x live in a ring of the 2 reach + 1 that a row of
-/// the output reads: the memory is the output's and a few rows'.
+/// G * V by the separable, symmetric pixel weights `g` of one axis
+/// (w[-m] = w[m]), along rows then columns; beyond the frame the nearest
+/// edge value (clamp) or nothing (gate). Each output adds w[m] times the
+/// sum of its two values m away, m from the reach down to 0, a row at a
+/// time (so the compiler may vectorise across the row without reordering a
+/// sum). The rows convolved along x live in a ring of the 2 reach + 1 that
+/// a row of the output reads: the memory is the output's and a few rows'.
 std::vector<double> separable_convolution(const std::vector<double>& values, int64_t w,
                                           int64_t h, const PixelKernel& g, FrameEdge edge)
 {
     const int64_t r = g.reach, taps = 2 * r + 1;
-    const double* k = g.weights.data();
+    const double* k = g.weights.data() + r;  // k[m] = w[m] = w[-m]
     std::vector<double> ring(static_cast<size_t>(taps * w));
     std::vector<double> line(static_cast<size_t>(w + 2 * r));
+    const std::vector<double> zeros(static_cast<size_t>(w), 0.0);
     // Row yy of the frame convolved along x, into its ring slot.
     const auto convolve_row = [&](int64_t yy) {
         const double* in = values.data() + yy * w;
@@ -635,14 +637,25 @@ std::vector<double> separable_convolution(const std::vector<double>& values, int
                 = x >= 0 && x < w ? in[x]
                   : edge == FrameEdge::clamp ? in[std::clamp<int64_t>(x, 0, w - 1)]
                                              : 0.0;
-        double* out = ring.data() + (yy % taps) * w;
+        double* out        = ring.data() + (yy % taps) * w;
+        const double* mid  = line.data() + r;
         std::fill(out, out + w, 0.0);
-        for (int64_t t = 0; t < taps; ++t) {
-            const double kt   = k[t];
-            const double* src = line.data() + t;
+        for (int64_t m = r; m > 0; --m) {
+            const double km = k[m];
             for (int64_t x = 0; x < w; ++x)
-                out[x] += kt * src[x];
+                out[x] += km * (mid[x - m] + mid[x + m]);
         }
+        for (int64_t x = 0; x < w; ++x)
+            out[x] += k[0] * mid[x];
+    };
+    // Row yy of the ring, or beyond the frame its edge row (clamp) or zeros.
+    const auto row = [&](int64_t yy) {
+        if (yy < 0 || yy >= h) {
+            if (edge == FrameEdge::gate)
+                return zeros.data();
+            yy = std::clamp<int64_t>(yy, 0, h - 1);
+        }
+        return static_cast<const double*>(ring.data() + (yy % taps) * w);
     };
     for (int64_t yy = 0; yy < std::min(h, r); ++yy)
         convolve_row(yy);
@@ -652,18 +665,16 @@ std::vector<double> separable_convolution(const std::vector<double>& values, int
         if (y + r < h)
             convolve_row(y + r);
         double* o = out.data() + y * w;
-        for (int64_t t = 0; t < taps; ++t) {
-            int64_t yy = y - r + t;
-            if (yy < 0 || yy >= h) {
-                if (edge == FrameEdge::gate)
-                    continue;
-                yy = std::clamp<int64_t>(yy, 0, h - 1);
-            }
-            const double kt   = k[t];
-            const double* src = ring.data() + (yy % taps) * w;
+        for (int64_t m = r; m > 0; --m) {
+            const double km   = k[m];
+            const double* up  = row(y - m);
+            const double* down = row(y + m);
             for (int64_t x = 0; x < w; ++x)
-                o[x] += kt * src[x];
+                o[x] += km * (up[x] + down[x]);
         }
+        const double* centre = row(y);
+        for (int64_t x = 0; x < w; ++x)
+            o[x] += k[0] * centre[x];
     }
     return out;
 }
