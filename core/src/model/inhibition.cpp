@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <utility>
 
 #include "model/image_formation.h"
 #include "model/light_spread.h"
@@ -73,7 +74,7 @@ Status plan_inhibition(const Stock& stock, const SceneSettings& scene,
             return;
         std::vector<double>& d = blurred[j];
         if (stock.inhibitor_diffusion_um > 0.0)
-            d = spread_frame(d, frame_width, frame_height, pitch_um, 1.0,
+            d = spread_frame(std::move(d), frame_width, frame_height, pitch_um, 1.0,
                              stock.inhibitor_diffusion_um, HalationSpec(), scene.edge, method);
         for (double& v : d)
             v += fog[j];

@@ -187,8 +187,10 @@ std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
 /// exposure; MODEL.md 10 blurs expected densities with it (scatter 1, no
 /// halation: the Gaussian alone). Deterministic as spread_exposure. Throws
 /// std::runtime_error (naming the keys to lower) when the frame plus the
-/// kernels' reach would need a transform of more than 2^28 values.
-std::vector<double> spread_frame(const std::vector<double>& values, int64_t frame_width,
+/// kernels' reach would need a transform of more than 2^28 values. The
+/// result takes the place of `values` (move them in: a frame is not held
+/// twice).
+std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
                                  double scatter_sigma_um, const HalationSpec& halation,
                                  FrameEdge edge, SpreadMethod method = SpreadMethod::fft);
