@@ -607,7 +607,7 @@ std::string help_text()
     out << "\nTable cache:\n";
     append_wrapped(out, "    ",
                    "The P(develop | N photons) tables that auto builds (seconds a stock) and "
-                   "the pixel scale's statistics (about a second a layer of a 4K frame) are "
+                   "the pixel scale's statistics (about a CPU second a layer at 4K) are "
                    "kept on disk for the next run: in $FILMGRAIN_CACHE_DIR/tables and "
                    "/pixel-models, else under $XDG_CACHE_HOME/filmgrain, else under "
                    "~/.cache/filmgrain (FILMGRAIN_CACHE_DIR=off: none). A run reads a file "
