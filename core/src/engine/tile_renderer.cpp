@@ -90,7 +90,11 @@ public:
                             [](const PopulationPlan& pp) {
                                 return pp.fast && pp.exposure == ExposureMethod::disc;
                             });
-                        const double m = (discs ? 2.0 : 1.0) * layer.margin_um;
+                        // Thinning reads the plane over each cell's
+                        // grains' discs (thin_filter).
+                        const double m = std::max((discs ? 2.0 : 1.0) * layer.margin_um,
+                                                  layer.margin_um + max_grain_radius_um(layer))
+                                         + kThinnedCellPitches * m_frame.input_pitch_um;
                         scratch.plane.fill(layer.exposure, m_frame,
                                            { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
                                              rect.y1_um + m });
@@ -98,11 +102,11 @@ public:
                     }
                     FastCounts c;
                     // The exposure integral of a batch's grain i (value x
-                    // um^2), after prepare(batch) for its cell.
+                    // um^2), the j-th of the indices given to prepare().
                     struct Centre {
                         const ExposurePlane& plane;
-                        void prepare(const FastGrains::Batch&) const {}
-                        double operator()(const FastGrains::Batch& b, size_t i) const
+                        void prepare(const FastGrains::Batch&, const uint32_t*, size_t) const {}
+                        double operator()(const FastGrains::Batch& b, size_t i, size_t) const
                         {
                             return plane.at(b.x[i], b.y[i]) * b.r[i] * b.r[i] * M_PI;
                         }
@@ -115,27 +119,32 @@ public:
                     struct Disc {
                         const ExposurePlane& plane;
                         const LayerExposure& exposure;
-                        std::vector<double>& values;
+                        TileScratch::DiscBatch& scratch;
                         double pitch_um;  ///< the input pixel's
-                        void prepare(const FastGrains::Batch& b) const
+                        void prepare(const FastGrains::Batch& b, const uint32_t* index,
+                                     size_t m) const
                         {
-                            if (values.size() < b.n)
-                                values.resize(b.n);
-                            plane.integrals_over_discs(b.x.data(), b.y.data(), b.r.data(), b.n,
-                                                       values.data());
+                            scratch.resize(m);
+                            for (size_t j = 0; j < m; ++j) {
+                                scratch.x[j] = b.x[index[j]];
+                                scratch.y[j] = b.y[index[j]];
+                                scratch.r[j] = b.r[index[j]];
+                            }
+                            plane.integrals_over_discs(scratch.x.data(), scratch.y.data(),
+                                                       scratch.r.data(), m, scratch.value.data());
                         }
-                        double operator()(const FastGrains::Batch& b, size_t i) const
+                        double operator()(const FastGrains::Batch& b, size_t i, size_t j) const
                         {
                             const double r_um = b.r[i];
                             if (r_um <= 0.5 * pitch_um)
-                                return values[i];
+                                return scratch.value[j];
                             return r_um <= pitch_um
                                        ? plane.integral_over_disc(b.x[i], b.y[i], r_um)
                                        : exposure.integrate_over_disc(b.x[i], b.y[i], r_um);
                         }
                     };
                     const Centre centre { scratch.plane };
-                    const Disc disc { scratch.plane, layer.exposure, scratch.disc_integrals,
+                    const Disc disc { scratch.plane, layer.exposure, scratch.disc_batch,
                                       scratch.plane.pitch_um() };
                     // Silver without inhibition (the common case) runs the
                     // kernel without the per-grain checks of MODEL.md 8, 10.
@@ -252,12 +261,66 @@ private:
         uint64_t grains = 0, developed = 0, photons = 0, events = 0;
     };
 
+    /// Cells of up to this many input pixels a side are thinned
+    /// (thin_filter): their bound reads at most (this + 2)^2 pixels of
+    /// the plane, which the tile's plane covers.
+    static constexpr double kThinnedCellPitches = 4.0;
+
+    static double max_grain_radius_um(const LayerPlan& layer)
+    {
+        double r = 0.0;
+        for (const PopulationPlan& pp : layer.populations)
+            r = std::max(r, pp.grains.max_radius_um());
+        return r;
+    }
+
+    /// Thinning a lit population with a curve to the grains that can
+    /// develop: a grain of radius r in cell (b, cx, cy) absorbs on average
+    /// at most k v_max pi r^2 photons, v_max being the largest exposure
+    /// value over the pixels the discs of the cell's grains can touch (the
+    /// disc integrals weight the plane's values by areas summing to pi
+    /// r^2, to the segment table's 1e-6 r^2 an edge: hence a 1e-5 margin),
+    /// so it develops with probability at most the curve's bound there
+    /// (the inhibitors only lower it: log factor >= 0), and not at all when
+    /// its uniform u < 1 - that bound. v_max comes from the plane, whose
+    /// values are the same whichever tile fills it. Bins whose cells are
+    /// wider than kThinnedCellPitches pixels are not thinned.
+    struct ThinFilter {
+        const DevelopCurve* curve = nullptr;  ///< null: every grain kept
+        /// sqrt(k v_max pi (1 + 1e-5)): times r, the root of the bound of
+        /// a grain's mean photons.
+        double root_bound_per_r = 0.0;
+        explicit operator bool() const { return curve != nullptr; }
+        /// Whether a grain of radius r and development bits u_bits can
+        /// develop (as develop_fast reads u from them).
+        bool operator()(double r_um, uint32_t u_bits) const
+        {
+            const double u = (static_cast<double>(u_bits) + 0.5) * 0x1.0p-32;
+            return u >= 1.0 - curve->probability_bound_at_root(root_bound_per_r * r_um);
+        }
+    };
+    static ThinFilter thin_filter(const DevelopCurve& curve, double k,
+                                  const PopulationGrains::Bin& bin, const ExposurePlane& plane,
+                                  int64_t cx, int64_t cy)
+    {
+        if (!(bin.cell_um <= kThinnedCellPitches * plane.pitch_um()))
+            return {};
+        const double r  = bin.max_radius_um;
+        const double x0 = static_cast<double>(cx) * bin.cell_um;
+        const double y0 = static_cast<double>(cy) * bin.cell_um;
+        const double v_max
+            = plane.max_over(x0 - r, y0 - r, x0 + bin.cell_um + r, y0 + bin.cell_um + r);
+        if (!(v_max < std::numeric_limits<double>::infinity()))
+            return {};
+        return { &curve, std::sqrt(k * v_max * M_PI * (1.0 + 1e-5)) };
+    }
+
     /// develop_fast's exposure integral for the fog's thinned grains
     /// (KineticsMethod::fog): none is read; each grain develops with
     /// probability 1, times the inhibitors' factor.
     struct NoLight {
-        void prepare(const FastGrains::Batch&) const {}
-        double operator()(const FastGrains::Batch&, size_t) const { return 0.0; }
+        void prepare(const FastGrains::Batch&, const uint32_t*, size_t) const {}
+        double operator()(const FastGrains::Batch&, size_t, size_t) const { return 0.0; }
     };
 
     /// The rectangle whose nearby grains (within their own radius) can have
@@ -311,17 +374,28 @@ private:
         const RectUm tile         = rect;
         std::vector<Disc>& discs  = scratch.discs;
         size_t nd                 = discs.size();
+        // A lit population with a curve: of each cell only the grains that
+        // can develop (thin_filter) are positioned and decided; the others
+        // are counted.
+        const ExposurePlane* thin_plane = !kFog && curve ? &scratch.plane : nullptr;
+        const auto filter_of = [&](size_t bin, int64_t cx, int64_t cy) {
+            return thin_plane ? thin_filter(*curve, k, pop.fast->bins()[bin], *thin_plane, cx, cy)
+                              : ThinFilter {};
+        };
+        // Each bin's cells as far as its own grains' images reach.
         pop.fast->for_each_cell_batch(
-            Plain ? rect : reach_rect(rect, layer, pop), scratch.batch,
+            rect, Plain ? 1.0 : std::max(1.0, layer.image_reach), scratch.batch, filter_of,
             [&](const FastGrains::Batch& b) {
                 const size_t n = b.n;
-                poll_stop(scratch.grains_seen, static_cast<uint32_t>(n));
+                poll_stop(scratch.grains_seen, static_cast<uint32_t>(b.drawn));
                 if (scratch.lambda.size() < n) {
                     scratch.lambda.resize(n);
                     scratch.u.resize(n);
                     scratch.decided.resize(n);
                     scratch.touching.resize(n);
                 }
+                // Each grain counted once: in the tile holding its centre.
+                c.grains += pop.fast->drawn_within(b, tile);
                 // The grains whose image touches the tile, in order: the
                 // only ones whose exposure is read (a grain of a nearby cell
                 // may lie beyond the input window a ROI was given).
@@ -334,9 +408,6 @@ private:
                                                    tile.y1_um)
                                : image_touches_rect(layer, disc, tile);
                 }
-                double* lambda   = scratch.lambda.data();
-                double* uniform  = scratch.u.data();
-                uint8_t* decided = scratch.decided.data();
                 // u in (0, 1); develops iff u >= 1 - P, as
                 // Development::develops. Kept for the second loop where the
                 // inhibitors change it.
@@ -347,14 +418,17 @@ private:
                             u = inhibited_uniform(u, inhibition->at(b.x[i], b.y[i]));
                     return u;
                 };
+                double* lambda   = scratch.lambda.data();
+                double* uniform  = scratch.u.data();
+                uint8_t* decided = scratch.decided.data();
                 if (m > 0)
-                    integral.prepare(b);
+                    integral.prepare(b, touching, m);
                 // Every touching grain's mean photons and its decision from
                 // the curve (j: its place among them).
                 const auto first_loop = [&](auto with_curve) {
                     for (size_t j = 0; j < m; ++j) {
                         const size_t i = touching[j];
-                        const double l = k * integral(b, i);
+                        const double l = k * integral(b, i, j);
                         const double u = uniform_of(i);
                         lambda[j]      = l;
                         if constexpr (!Plain)
@@ -389,10 +463,9 @@ private:
                         o = decide_from_mean(pop, g, lambda[j], Plain ? uniform_of(i) : uniform[j]);
                         developed = o.developed;
                     }
-                    // Count each grain once: in the tile holding its centre.
+                    // Counted in the tile holding its centre (as c.grains).
                     if (disc.x_um >= tile.x0_um && disc.x_um < tile.x1_um
                         && disc.y_um >= tile.y0_um && disc.y_um < tile.y1_um) {
-                        ++c.grains;
                         c.developed += developed;
                         c.photons += o.photons;
                         c.events += o.events;

@@ -43,7 +43,20 @@ struct TileScratch {
     std::vector<double> lambda, u;
     std::vector<uint8_t> decided;
     std::vector<uint32_t> touching;  ///< indices into the batch
-    std::vector<double> disc_integrals;  ///< the batch's, from the plane
+    /// The discs of a batch whose exposure is integrated, and their
+    /// integrals from the plane.
+    struct DiscBatch {
+        std::vector<double> x, y, r, value;
+        void resize(size_t n)
+        {
+            if (x.size() < n) {
+                x.resize(n);
+                y.resize(n);
+                r.resize(n);
+                value.resize(n);
+            }
+        }
+    } disc_batch;
 };
 
 

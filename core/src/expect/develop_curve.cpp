@@ -45,7 +45,8 @@ DevelopCurve::DevelopCurve(const DevelopTable& table, int nodes)
         const double mid = 0.5 * (lo + hi);
         (upper_tail(mid, n_max) <= kTailMass ? lo : hi) = mid;
     }
-    m_lambda_max = lo;
+    m_lambda_max      = lo;
+    m_root_lambda_max = std::sqrt(lo);
     nodes        = std::max(nodes, 2);
     const double step = std::sqrt(m_lambda_max) / nodes;
     m_inv_step        = step > 0.0 ? 1.0 / step : 0.0;
@@ -56,6 +57,10 @@ DevelopCurve::DevelopCurve(const DevelopTable& table, int nodes)
         m_p[static_cast<size_t>(i)] = exact_probability(table, s * s);
     }
     m_p.back() = m_p[static_cast<size_t>(nodes)];
+    m_running_max.resize(m_p.size());
+    double top = 0.0;
+    for (size_t i = 0; i < m_p.size(); ++i)
+        m_running_max[i] = top = std::max(top, m_p[i]);
     // Linear interpolation errs most between nodes: measure it at every
     // midpoint against the sum itself.
     for (int i = 0; i < nodes; ++i) {

@@ -45,6 +45,26 @@ public:
         return m_p[i] + f * (m_p[i + 1] - m_p[i]);
     }
 
+    /// An upper bound of probability(l) over every 0 <= l <= lambda: the
+    /// largest node value up to the node at or after lambda (linear
+    /// interpolation never exceeds its two nodes, and the tabulated chain
+    /// need not make the curve monotonic); 1 beyond lambda_max(), where
+    /// grains are decided from their photon count. For thinning the grain
+    /// process to the grains that can develop (tile_renderer.cpp).
+    double probability_bound(double lambda) const
+    {
+        return probability_bound_at_root(std::sqrt(std::max(lambda, 0.0)));
+    }
+    /// probability_bound(s^2) for s >= 0 (the nodes are even in s: no root
+    /// to take where s is known).
+    double probability_bound_at_root(double s) const
+    {
+        if (!(s <= m_root_lambda_max))
+            return 1.0;
+        const double t = std::min(s * m_inv_step, m_t_max);
+        return m_running_max[static_cast<size_t>(t) + 1];
+    }
+
     /// Largest |interpolated - exact sum| found at the midpoints between
     /// nodes (where linear interpolation errs most), plus the truncated
     /// Poisson tail: the curve's error on top of the table's.
@@ -56,12 +76,15 @@ public:
 
 private:
     double m_lambda_max = 0.0;
+    double m_root_lambda_max = 0.0;  ///< sqrt(m_lambda_max)
     double m_inv_step   = 0.0;
     double m_t_max      = 0.0;  ///< the last node's index
     double m_max_error  = 0.0;
     /// P at the nodes, plus a copy of the last one (so that lambda_max()
     /// itself interpolates without a bounds check).
     std::vector<double> m_p;
+    /// max(m_p[0..i]) at each i (probability_bound).
+    std::vector<double> m_running_max;
 };
 
 }  // namespace filmgrain

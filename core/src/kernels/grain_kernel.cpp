@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -46,6 +47,38 @@ FastGrains::FastGrains(const PopulationGrains& grains, int quantiles)
         m_counts.emplace_back(bin.grains_per_um2 * bin.cell_um * bin.cell_um);
     }
     m_mean_area_error = total > 0.0 && area_exact > 0.0 ? std::fabs(area_table - area_exact) / area_exact : 0.0;
+}
+
+size_t FastGrains::drawn_within(const Batch& batch, const RectUm& rect) const
+{
+    const auto inside = [&](double x, double y) {
+        return x >= rect.x0_um && x < rect.x1_um && y >= rect.y0_um && y < rect.y1_um;
+    };
+    size_t count = 0;
+    if (batch.n == batch.drawn) {
+        for (size_t i = 0; i < batch.n; ++i)
+            count += inside(batch.x[i], batch.y[i]);
+        return count;
+    }
+    const double cell_um = m_grains.bins()[batch.bin].cell_um;
+    const double x0 = static_cast<double>(batch.cx) * cell_um;
+    const double y0 = static_cast<double>(batch.cy) * cell_um;
+    // The positions as for_each_cell_batch draws them, x0 + bits * scale,
+    // lie in [x0, x0 + cell_um] (the top only by rounding): the cell's
+    // count where that lies strictly inside or outside.
+    if (x0 >= rect.x0_um && x0 + cell_um < rect.x1_um && y0 >= rect.y0_um
+        && y0 + cell_um < rect.y1_um)
+        return batch.drawn;
+    if (x0 + cell_um < rect.x0_um || x0 >= rect.x1_um || y0 + cell_um < rect.y0_um
+        || y0 >= rect.y1_um)
+        return 0;
+    const double scale = cell_um * 0x1.0p-32;
+    for (size_t i = 0; i < batch.drawn; ++i) {
+        const uint64_t w0 = counter_u64(batch.cell, 2 * i);
+        count += inside(x0 + static_cast<double>(w0 & 0xffffffffu) * scale,
+                        y0 + static_cast<double>(w0 >> 32) * scale);
+    }
+    return count;
 }
 
 SegmentTable::SegmentTable() : m_area(kIntervals + 2)
@@ -323,6 +356,23 @@ void ExposurePlane::integrals_over_discs(const double* x_um, const double* y_um,
 #endif
     (void)portable;
     plane_integrals_portable(PlaneIntegrals(*this), x_um, y_um, r_um, n, out);
+}
+
+double ExposurePlane::max_over(double x0_um, double y0_um, double x1_um, double y1_um) const
+{
+    const double gx0 = std::floor(x0_um * m_per_pitch_um - m_x0);
+    const double gy0 = std::floor(y0_um * m_per_pitch_um - m_y0);
+    const double gx1 = std::floor(x1_um * m_per_pitch_um - m_x0);
+    const double gy1 = std::floor(y1_um * m_per_pitch_um - m_y0);
+    if (!(gx0 >= 0.0 && gy0 >= 0.0 && gx1 < m_w && gy1 < m_h))
+        return std::numeric_limits<double>::infinity();
+    float top = 0.0f;
+    for (size_t y = static_cast<size_t>(gy0); y <= static_cast<size_t>(gy1); ++y) {
+        const float* row = m_padded.data() + (y + kPad) * m_padded_stride + kPad;
+        for (size_t x = static_cast<size_t>(gx0); x <= static_cast<size_t>(gx1); ++x)
+            top = std::max(top, row[x]);
+    }
+    return top;
 }
 
 double ExposurePlane::integral_over_disc(double x_um, double y_um, double r_um) const

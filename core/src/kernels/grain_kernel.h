@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "model/exposure.h"
@@ -56,19 +57,48 @@ public:
     /// A cell's grains as arrays, for kernels that decide them in plain
     /// loops: grain i is at (x[i], y[i]) with radius r[i] and development
     /// bits u_bits[i]; its identity (for_each_grain_near's id) is
-    /// grain_id(i).
+    /// grain_id(i). `drawn`: the cell's grains before any filter.
     struct Batch {
         uint64_t cell = 0;
+        size_t bin    = 0;
+        int64_t cx = 0, cy = 0;
         size_t n      = 0;
+        size_t drawn  = 0;
         std::vector<double> x, y, r;
         std::vector<uint32_t> u_bits;
-        uint64_t grain_id(size_t i) const { return hash_combine(cell, i); }
+        std::vector<uint32_t> index;  ///< each grain's place among the drawn
+        uint64_t grain_id(size_t i) const { return hash_combine(cell, index[i]); }
     };
     /// Calls visit(batch) for every cell of for_each_grain_near, in its
     /// order, with the cell's grains (the same grains, in the same order).
     /// `batch` is scratch, reused from cell to cell.
     template<typename Visit>
-    void for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const;
+    void for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const
+    {
+        for_each_cell_batch(
+            rect, 1.0, batch, [](size_t, int64_t, int64_t) { return nullptr; }, visit);
+    }
+    /// The same for grains whose image reaches `reach` times their radius
+    /// (PopulationGrains::for_each_cell_near), with a filter:
+    /// filter_of(bin, cx, cy) gives, for each cell,
+    /// either nullptr (every grain) or a predicate keep(r_um, u_bits) on a
+    /// grain's radius and development bits; the batch then holds only the
+    /// grains it keeps (same values, same identities, in order; batch.drawn
+    /// counts them all), and only their positions are drawn. For kernels
+    /// that can tell from radius and uniform alone that a grain will not
+    /// develop (tile_renderer.cpp's thinning).
+    template<typename FilterOf, typename Visit>
+    void for_each_cell_batch(const RectUm& rect, double reach, Batch& batch, FilterOf&& filter_of,
+                             Visit&& visit) const;
+
+    /// How many of a batch's drawn grains (batch.drawn, kept or not) have
+    /// their centre in [x0, x1) x [y0, y1): from the kept grains'
+    /// positions when the filter kept all, else the cell's count where it
+    /// lies wholly inside or outside, else every drawn grain's position.
+    size_t drawn_within(const Batch& batch, const RectUm& rect) const;
+
+    /// The bins, as PopulationGrains has them.
+    const std::vector<PopulationGrains::Bin>& bins() const { return m_grains.bins(); }
 
 private:
     PopulationGrains m_grains;
@@ -82,8 +112,9 @@ private:
     double m_mean_area_error  = 0.0;
 };
 
-template<typename Visit>
-void FastGrains::for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& visit) const
+template<typename FilterOf, typename Visit>
+void FastGrains::for_each_cell_batch(const RectUm& rect, double reach, Batch& batch,
+                                     FilterOf&& filter_of, Visit&& visit) const
 {
     constexpr double k2m32 = 0x1.0p-32;
     const double q         = static_cast<double>(m_quantiles) * k2m32;
@@ -92,13 +123,17 @@ void FastGrains::for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& v
         const uint64_t cell              = m_grains.cell_id(b, cx, cy);
         Rng count_rng(cell, Stage::fast_cell);
         const uint64_t n = m_counts[b].sample(count_rng.uniform());
-        batch.cell = cell;
-        batch.n    = static_cast<size_t>(n);
-        if (batch.x.size() < batch.n) {
-            batch.x.resize(batch.n);
-            batch.y.resize(batch.n);
-            batch.r.resize(batch.n);
-            batch.u_bits.resize(batch.n);
+        batch.cell  = cell;
+        batch.bin   = b;
+        batch.cx    = cx;
+        batch.cy    = cy;
+        batch.drawn = static_cast<size_t>(n);
+        if (batch.x.size() < batch.drawn) {
+            batch.x.resize(batch.drawn);
+            batch.y.resize(batch.drawn);
+            batch.r.resize(batch.drawn);
+            batch.u_bits.resize(batch.drawn);
+            batch.index.resize(batch.drawn);
         }
         const double* radius = m_radius[b].data();
         const double x0 = static_cast<double>(cx) * bin.cell_um;
@@ -108,18 +143,33 @@ void FastGrains::for_each_cell_batch(const RectUm& rect, Batch& batch, Visit&& v
         double* ys = batch.y.data();
         double* rs = batch.r.data();
         uint32_t* us = batch.u_bits.data();
-        for (size_t i = 0; i < batch.n; ++i) {
-            const uint64_t w0 = counter_u64(cell, 2 * i);
+        uint32_t* index = batch.index.data();
+        const auto keep = filter_of(b, cx, cy);
+        // Radius and development bits first, each grain written and kept
+        // or not without a branch; then the kept grains' positions.
+        size_t m = 0;
+        for (size_t i = 0; i < batch.drawn; ++i) {
             const uint64_t w1 = counter_u64(cell, 2 * i + 1);
-            xs[i]          = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
-            ys[i]          = y0 + static_cast<double>(w0 >> 32) * scale;
-            const double t = static_cast<double>(w1 & 0xffffffffu) * q;
-            const size_t k = static_cast<size_t>(t);
-            rs[i] = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
-            us[i] = static_cast<uint32_t>(w1 >> 32);
+            const double t    = static_cast<double>(w1 & 0xffffffffu) * q;
+            const size_t k    = static_cast<size_t>(t);
+            const double r_um = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
+            const uint32_t u  = static_cast<uint32_t>(w1 >> 32);
+            rs[m]    = r_um;
+            us[m]    = u;
+            index[m] = static_cast<uint32_t>(i);
+            if constexpr (std::is_same_v<std::decay_t<decltype(keep)>, std::nullptr_t>)
+                ++m;
+            else
+                m += !keep || keep(r_um, u);
         }
+        for (size_t j = 0; j < m; ++j) {
+            const uint64_t w0 = counter_u64(cell, 2 * static_cast<uint64_t>(index[j]));
+            xs[j] = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
+            ys[j] = y0 + static_cast<double>(w0 >> 32) * scale;
+        }
+        batch.n = m;
         visit(static_cast<const Batch&>(batch));
-    });
+    }, reach);
 }
 
 template<typename Visit>
@@ -204,6 +254,11 @@ public:
     /// agree).
     void integrals_over_discs(const double* x_um, const double* y_um, const double* r_um,
                               size_t n, double* out, bool portable = false) const;
+
+    /// The largest v over the input pixels that the rectangle [x0, x1] x
+    /// [y0, y1] touches (a bound of v over it); +infinity where it reaches
+    /// beyond the filled window.
+    double max_over(double x0_um, double y0_um, double x1_um, double y1_um) const;
 
     /// v at the input pixel holding (x, y); 0 outside the filled window
     /// (outside the image, or beyond the rectangle it was filled for).

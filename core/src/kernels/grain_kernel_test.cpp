@@ -6,8 +6,10 @@
 #include "kernels/grain_kernel.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -118,6 +120,93 @@ TEST(FastGrains, ACellsGrainsDoNotDependOnTheRegionAsked)
     });
     EXPECT_FALSE(a.empty());
     EXPECT_EQ(a, b);
+}
+
+TEST(DevelopCurve, ProbabilityBoundHoldsOverEveryLowerMean)
+{
+    // The thinning's bound (tile_renderer.cpp): probability_bound(l) >=
+    // probability(l') for every l' <= l, on a grid 16 times finer than the
+    // nodes (the running maximum taken on that grid), and from the square
+    // root alike; 1 beyond lambda_max, where grains need their count.
+    const DevelopTable table = small_develop_table();
+    const DevelopCurve curve(table);
+    const double root_max = std::sqrt(curve.lambda_max());
+    const int steps       = 16 * static_cast<int>(curve.node_count());
+    double running        = 0.0;
+    for (int i = 0; i <= steps; ++i) {
+        const double s = root_max * i / steps;
+        running        = std::max(running, curve.probability(s * s));
+        ASSERT_GE(curve.probability_bound(s * s), running) << "lambda " << s * s;
+        ASSERT_GE(curve.probability_bound_at_root(s), running) << "lambda " << s * s;
+        // Not a loose bound: at most the curve's largest value up to two
+        // node steps further.
+        const double ahead = std::min(root_max, s + 2.0 * root_max / curve.node_count());
+        ASSERT_LE(curve.probability_bound(s * s),
+                  std::max(running, curve.probability(ahead * ahead)) + 1e-12);
+    }
+    EXPECT_EQ(curve.probability_bound(curve.lambda_max() * 1.0001), 1.0);
+    EXPECT_EQ(curve.probability_bound_at_root(std::numeric_limits<double>::infinity()), 1.0);
+    EXPECT_EQ(curve.probability_bound_at_root(std::nan("")), 1.0);
+}
+
+TEST(FastGrains, AFilterKeepsTheSameGrainsAndCountsTheRest)
+{
+    // A filtered batch holds exactly the unfiltered batch's grains that
+    // the filter keeps (positions, radii, bits, identities, order), and
+    // drawn_within counts every drawn grain, kept or not, for rectangles
+    // that hold a cell wholly, miss it or cut it.
+    Population pop;
+    pop.diameter_log_sigma = 0.5;
+    const PopulationGrains grains(pop, 11, 0, 2);
+    const FastGrains fast(grains);
+    const RectUm region { 3.0, 5.0, 23.0, 19.0 };
+    const double median_r = grains.radius_at_z_um(0.0);
+    const auto keep = [&](double r_um, uint32_t u_bits) {
+        return r_um > median_r || (u_bits & 3u) == 0;
+    };
+    struct Kept {
+        double x, y, r;
+        uint32_t u;
+        uint64_t id;
+        bool operator==(const Kept& o) const
+        {
+            return x == o.x && y == o.y && r == o.r && u == o.u && id == o.id;
+        }
+    };
+    std::vector<Kept> all_kept, filtered;
+    std::vector<size_t> drawn_all, drawn_filtered;
+    const std::vector<RectUm> rects = { region, { 0.0, 0.0, 1000.0, 1000.0 },
+                                        { 7.3, 8.1, 9.9, 12.2 }, { 500.0, 500.0, 600.0, 600.0 } };
+    std::vector<size_t> within_all(rects.size()), within_filtered(rects.size());
+    FastGrains::Batch batch;
+    fast.for_each_cell_batch(region, batch, [&](const FastGrains::Batch& b) {
+        drawn_all.push_back(b.drawn);
+        for (size_t i = 0; i < b.n; ++i)
+            if (keep(b.r[i], b.u_bits[i]))
+                all_kept.push_back({ b.x[i], b.y[i], b.r[i], b.u_bits[i], b.grain_id(i) });
+        for (size_t k = 0; k < rects.size(); ++k)
+            within_all[k] += fast.drawn_within(b, rects[k]);
+    });
+    struct Keep {
+        const decltype(keep)& f;
+        explicit operator bool() const { return true; }
+        bool operator()(double r, uint32_t u) const { return f(r, u); }
+    };
+    fast.for_each_cell_batch(
+        region, 1.0, batch, [&](size_t, int64_t, int64_t) { return Keep { keep }; },
+        [&](const FastGrains::Batch& b) {
+            drawn_filtered.push_back(b.drawn);
+            for (size_t i = 0; i < b.n; ++i)
+                filtered.push_back({ b.x[i], b.y[i], b.r[i], b.u_bits[i], b.grain_id(i) });
+            for (size_t k = 0; k < rects.size(); ++k)
+                within_filtered[k] += fast.drawn_within(b, rects[k]);
+        });
+    EXPECT_EQ(drawn_all, drawn_filtered);
+    ASSERT_GT(all_kept.size(), 100u);
+    EXPECT_EQ(all_kept, filtered);
+    EXPECT_EQ(within_all, within_filtered);
+    EXPECT_GT(within_all[2], 0u);
+    EXPECT_EQ(within_all[3], 0u);
 }
 
 TEST(ExposurePlane, DiscIntegralIsTheBoxImagesIntegral)

@@ -132,10 +132,12 @@ public:
     template<typename Visit> void for_each_grain_near(const RectUm& rect, Visit&& visit) const;
 
     /// Calls visit(bin, cx, cy) for every cell whose grains may reach
-    /// `rect` (centres within the bin's largest radius of it), in the order
-    /// of for_each_grain_near. Engines that generate a cell's grains their
-    /// own way use this and cell_id().
-    template<typename Visit> void for_each_cell_near(const RectUm& rect, Visit&& visit) const;
+    /// `rect` (centres within the bin's largest radius of it, times `reach`
+    /// for an image that reaches beyond the grain: dye clouds), in the
+    /// order of for_each_grain_near. Engines that generate a cell's grains
+    /// their own way use this and cell_id().
+    template<typename Visit>
+    void for_each_cell_near(const RectUm& rect, Visit&& visit, double reach = 1.0) const;
 
     /// The identity of a cell, keying its random streams.
     uint64_t cell_id(size_t bin, int64_t cx, int64_t cy) const
@@ -168,11 +170,11 @@ private:
 };
 
 template<typename Visit>
-void PopulationGrains::for_each_cell_near(const RectUm& rect, Visit&& visit) const
+void PopulationGrains::for_each_cell_near(const RectUm& rect, Visit&& visit, double reach) const
 {
     for (size_t b = 0; b < m_bins.size(); ++b) {
         const Bin& bin   = m_bins[b];
-        const double pad = bin.max_radius_um;
+        const double pad = reach * bin.max_radius_um;
         const auto cell  = [&](double v) {
             return static_cast<int64_t>(std::floor(v / bin.cell_um));
         };
