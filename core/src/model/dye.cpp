@@ -56,8 +56,8 @@ private:
 /// clouds is there, the others cloud_density per cloud.
 class LimitedCloudCount {
 public:
-    LimitedCloudCount(const Layer& layer, double max_density, DyeScratch& /*scratch*/)
-        : m_layer(layer), m_max_density(max_density)
+    LimitedCloudCount(const Layer& layer, double max_density, DyeScratch& scratch)
+        : m_layer(layer), m_max_density(max_density), m_memo(scratch.memo)
     {
     }
     void step(int step, uint8_t pop)
@@ -68,8 +68,31 @@ public:
     double transmittance()
     {
         if (m_stale) {
+            // What the density depends on (each limited population's
+            // presence, the others' counts), 15 bits a population, keys a
+            // cache of the transmittances already computed (the same
+            // value, without the exponential). The top bit marks a key (an
+            // empty slot holds 0).
+            const size_t np = m_layer.populations.size();
+            uint64_t key    = uint64_t { 1 } << 63;
+            bool keyed      = np <= 4;
+            for (size_t p = 0; p < np && keyed; ++p) {
+                const int c = m_layer.populations[p].max_dye_density > 0.0 ? (m_count[p] > 0)
+                                                                            : m_count[p];
+                keyed = c >= 0 && c < 0x7fff;
+                key |= static_cast<uint64_t>(c) << (15 * p);
+            }
+            std::pair<uint64_t, double>* slot = nullptr;
+            if (keyed) {
+                slot = &m_memo[(key * 0x9e3779b97f4a7c15ULL) >> (64 - kMemoBits)];
+                if (slot->first == key) {
+                    m_t     = slot->second;
+                    m_stale = false;
+                    return m_t;
+                }
+            }
             double d = 0.0;
-            for (size_t p = 0; p < m_layer.populations.size(); ++p) {
+            for (size_t p = 0; p < np; ++p) {
                 const double limit = m_layer.populations[p].max_dye_density;
                 if (limit > 0.0)
                     d += m_count[p] > 0 ? limit : 0.0;
@@ -78,17 +101,44 @@ public:
             }
             m_t     = std::exp(-kLn10 * std::min(d, m_max_density));
             m_stale = false;
+            if (slot)
+                *slot = { key, m_t };
         }
         return m_t;
+    }
+
+    /// Slots of the cache (2^kMemoBits), emptied for each block.
+    static constexpr int kMemoBits = 10;
+    static void clear_memo(DyeScratch& scratch)
+    {
+        scratch.memo.assign(size_t { 1 } << kMemoBits, { 0, 0.0 });
     }
 
 private:
     const Layer& m_layer;
     double m_max_density;
+    std::vector<std::pair<uint64_t, double>>& m_memo;
     std::array<int, 256> m_count {};  // per population (uint8_t indices)
     double m_t   = 1.0;
     bool m_stale = true;
 };
+
+/// Sorts a sequence that is nearly in order (each element a few places
+/// from its own): insertion, O(n + inversions).
+void sort_nearly_sorted(std::vector<std::pair<double, int>>& v)
+{
+    for (size_t i = 1; i < v.size(); ++i) {
+        if (!(v[i] < v[i - 1]))
+            continue;
+        const std::pair<double, int> x = v[i];
+        size_t j = i;
+        do {
+            v[j] = v[j - 1];
+            --j;
+        } while (j > 0 && x < v[j - 1]);
+        v[j] = x;
+    }
+}
 
 /// Disc clouds: along each of `samples` rows per pixel row, D(x) is a
 /// whole number of clouds times cloud_density (or, Counter
@@ -112,6 +162,9 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
     // population p enters, -(1 + 2 p) where it leaves (p = 0 without
     // `population`: the codes +-1 of a plain count).
     std::vector<std::pair<double, int>>& ends = scratch.ends;
+    std::vector<std::pair<double, int>>& enters = scratch.enters;
+    std::vector<std::pair<double, int>>& leaves = scratch.leaves;
+    std::vector<size_t>& by_x = scratch.by_x;
     const auto pop_of = [&](size_t grain) -> uint8_t { return population ? population[grain] : 0; };
     scratch.level.clear();
     std::vector<double> sum(static_cast<size_t>(tw));
@@ -119,12 +172,21 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
         std::fill(sum.begin(), sum.end(), 0.0);
         const size_t b = scratch.offsets[static_cast<size_t>(row - y0)];
         const size_t e = scratch.offsets[static_cast<size_t>(row - y0 + 1)];
+        // The row's clouds by centre: along each sample row their chord
+        // ends are then nearly in order (an end lies within a cloud radius
+        // of its centre), sorted by insertion and merged. The result is the
+        // sorted sequence of ends, whatever sort makes it.
+        by_x.assign(scratch.members.begin() + static_cast<std::ptrdiff_t>(b),
+                    scratch.members.begin() + static_cast<std::ptrdiff_t>(e));
+        std::sort(by_x.begin(), by_x.end(), [&](size_t p, size_t q) {
+            return grains[p].x_um < grains[q].x_um || (grains[p].x_um == grains[q].x_um && p < q);
+        });
         for (int64_t j = 0; j < s; ++j) {
             const double y = (static_cast<double>(row * s + j) + 0.5) * sy;
-            ends.clear();
+            enters.clear();
+            leaves.clear();
             Counter count(layer, max_density, scratch);  // clouds covering the block's left edge
-            for (size_t m = b; m < e; ++m) {
-                const size_t gi = scratch.members[m];
+            for (const size_t gi : by_x) {
                 const Disc& g   = grains[gi];
                 const double rc = layer.cloud_diameter_ratio * g.r_um;
                 const double dy = y - g.y_um;
@@ -138,11 +200,14 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
                 if (a <= left)
                     count.step(+1, pop_of(gi));
                 else
-                    ends.push_back({ a, +1 + tag });
+                    enters.push_back({ a, +1 + tag });
                 if (c < right)
-                    ends.push_back({ c, -1 - tag });
+                    leaves.push_back({ c, -1 - tag });
             }
-            std::sort(ends.begin(), ends.end());
+            sort_nearly_sorted(enters);
+            sort_nearly_sorted(leaves);
+            ends.resize(enters.size() + leaves.size());
+            std::merge(enters.begin(), enters.end(), leaves.begin(), leaves.end(), ends.begin());
             ends.push_back({ right, 0 });
             double x   = left;
             int64_t ix = x0;  // the pixel holding x
@@ -390,6 +455,7 @@ void dye_transmittance(const std::vector<Disc>& grains, const std::vector<size_t
                       static_cast<uint8_t>(p));
             begin = population_end[p];
         }
+        LimitedCloudCount::clear_memo(scratch);
         disc_rows<LimitedCloudCount>(grains, population.data(), layer, max_density, x0, y0, x1,
                                      y1, px_um, py_um, samples, scratch, transmittance);
         return;
