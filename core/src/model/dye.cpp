@@ -183,8 +183,12 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
         });
         for (int64_t j = 0; j < s; ++j) {
             const double y = (static_cast<double>(row * s + j) + 0.5) * sy;
-            enters.clear();
-            leaves.clear();
+            // Room for every cloud's ends, written through pointers (no
+            // size kept in memory per end), then cut to what was written.
+            enters.resize(by_x.size());
+            leaves.resize(by_x.size());
+            std::pair<double, int>* enter = enters.data();
+            std::pair<double, int>* leave = leaves.data();
             Counter count(layer, max_density, scratch);  // clouds covering the block's left edge
             for (const size_t gi : by_x) {
                 const Disc& g   = grains[gi];
@@ -200,10 +204,12 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
                 if (a <= left)
                     count.step(+1, pop_of(gi));
                 else
-                    enters.push_back({ a, +1 + tag });
+                    *enter++ = { a, +1 + tag };
                 if (c < right)
-                    leaves.push_back({ c, -1 - tag });
+                    *leave++ = { c, -1 - tag };
             }
+            enters.resize(static_cast<size_t>(enter - enters.data()));
+            leaves.resize(static_cast<size_t>(leave - leaves.data()));
             sort_nearly_sorted(enters);
             sort_nearly_sorted(leaves);
             ends.resize(enters.size() + leaves.size());
