@@ -164,6 +164,10 @@ void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& p
                 << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
                 << "; radii from tabulated quantiles: relative error of the mean area "
                 << format_g(pp.fast->mean_area_relative_error()) << ")";
+        if (pp.curve && pp.fast && !plan.pixel_model && !plan.notes.fog_alone)
+            why << "; a grain whose uniform cannot reach the curve's bound at the brightest "
+                   "pixel its disc can touch cannot develop: counted, not positioned (the same "
+                   "grains develop)";
         why << "; ";
     }
     if (plan.notes.fog_alone)
