@@ -90,11 +90,11 @@ public:
                             [](const PopulationPlan& pp) {
                                 return pp.fast && pp.exposure == ExposureMethod::disc;
                             });
-                        // Thinning reads the plane over each cell's
-                        // grains' discs (thin_filter).
-                        const double m = std::max((discs ? 2.0 : 1.0) * layer.margin_um,
-                                                  layer.margin_um + max_grain_radius_um(layer))
-                                         + kThinnedCellPitches * m_frame.input_pitch_um;
+                        // (No wider: a ROI's render reads no input beyond
+                        // read_region. The grain filter reads this plane
+                        // and keeps every grain of a cell whose discs may
+                        // reach past it.)
+                        const double m = (discs ? 2.0 : 1.0) * layer.margin_um;
                         scratch.plane.fill(layer.exposure, m_frame,
                                            { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
                                              rect.y1_um + m });
@@ -261,18 +261,10 @@ private:
         uint64_t grains = 0, developed = 0, photons = 0, events = 0;
     };
 
-    /// Cells of up to this many input pixels a side are thinned
+    /// Cells of up to this many input pixels a side are filtered
     /// (thin_filter): their bound reads at most (this + 2)^2 pixels of
-    /// the plane, which the tile's plane covers.
+    /// the plane.
     static constexpr double kThinnedCellPitches = 4.0;
-
-    static double max_grain_radius_um(const LayerPlan& layer)
-    {
-        double r = 0.0;
-        for (const PopulationPlan& pp : layer.populations)
-            r = std::max(r, pp.grains.max_radius_um());
-        return r;
-    }
 
     /// Thinning a lit population with a curve to the grains that can
     /// develop: a grain of radius r in cell (b, cx, cy) absorbs on average
@@ -282,9 +274,10 @@ private:
     /// r^2, to the segment table's 1e-6 r^2 an edge: hence a 1e-5 margin),
     /// so it develops with probability at most the curve's bound there
     /// (the inhibitors only lower it: log factor >= 0), and not at all when
-    /// its uniform u < 1 - that bound. v_max comes from the plane, whose
-    /// values are the same whichever tile fills it. Bins whose cells are
-    /// wider than kThinnedCellPitches pixels are not thinned.
+    /// its uniform u < 1 - that bound. v_max comes from the tile's plane;
+    /// a cell whose discs may reach beyond it, or of a bin whose cells are
+    /// wider than kThinnedCellPitches pixels, keeps every grain. Which
+    /// grains are dropped never changes an outcome: they cannot develop.
     struct ThinFilter {
         const DevelopCurve* curve = nullptr;  ///< null: every grain kept
         /// sqrt(k v_max pi (1 + 1e-5)): times r, the root of the bound of
