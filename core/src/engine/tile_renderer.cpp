@@ -51,6 +51,8 @@ public:
         , m_counters(stock.layers.size())
         , m_stop(stop)
     {
+        for (size_t l = 0; l < stock.layers.size(); ++l)
+            m_to_density.emplace_back(stock.max_density, stock.layer_base_density(l));
     }
 
     /// Renders the scan pixels [x0, x1) x [y0, y1) of every layer.
@@ -560,24 +562,26 @@ private:
         const LayerPlan& plan = m_layers[layer];
         scratch.fraction.resize(static_cast<size_t>(tw * th));
         scratch.values.resize(static_cast<size_t>(tw * th));
-        for (int64_t iy = y0; iy < y1; ++iy)
-            for (int64_t ix = x0; ix < x1; ++ix) {
-                const RectUm r = m_frame.scan_rect(ix, iy, ix + 1, iy + 1);
-                scratch.values[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
-                    = plan.exposure.mean_over_rect(r.x0_um, r.y0_um, r.x1_um, r.y1_um);
-            }
+        // The scan pixels' edges on the film.
+        std::vector<double>& xs = scratch.edges_x;
+        std::vector<double>& ys = scratch.edges_y;
+        xs.resize(static_cast<size_t>(tw + 1));
+        ys.resize(static_cast<size_t>(th + 1));
+        for (int64_t i = 0; i <= tw; ++i)
+            xs[static_cast<size_t>(i)] = m_frame.scan_rect(x0 + i, y0, x0 + i, y0).x0_um;
+        for (int64_t j = 0; j <= th; ++j)
+            ys[static_cast<size_t>(j)] = m_frame.scan_rect(x0, y0 + j, x0, y0 + j).y0_um;
+        plan.exposure.means_over_grid(xs, ys, scratch.values.data());
         // MODEL.md 10: the inhibitors' log factor at each pixel's centre
         // (it is constant over each input pixel; a scan pixel that spans
         // several takes its centre's).
         const double* log_factor = nullptr;
         if (plan.inhibition) {
             scratch.log_factor.resize(static_cast<size_t>(tw * th));
-            for (int64_t iy = y0; iy < y1; ++iy)
-                for (int64_t ix = x0; ix < x1; ++ix) {
-                    const RectUm r = m_frame.scan_rect(ix, iy, ix + 1, iy + 1);
-                    scratch.log_factor[static_cast<size_t>((iy - y0) * tw + (ix - x0))]
-                        = plan.inhibition->at(0.5 * (r.x0_um + r.x1_um), 0.5 * (r.y0_um + r.y1_um));
-                }
+            for (size_t j = 0; j < static_cast<size_t>(th); ++j)
+                for (size_t i = 0; i < static_cast<size_t>(tw); ++i)
+                    scratch.log_factor[j * static_cast<size_t>(tw) + i]
+                        = plan.inhibition->at(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]));
             log_factor = scratch.log_factor.data();
         }
         sample_pixel_transmittance(*plan.pixel_model, plan.pixel_key, x0, y0, x1, y1,
@@ -593,17 +597,12 @@ private:
         const size_t nl = m_stock.layers.size();
         const size_t o  = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
                                              + (ix - m_roi.x_begin));
-        m_out[o * nl + layer] = static_cast<float>(density_from_transmittance(
-            transmittance, m_stock.max_density, m_stock.layer_base_density(layer)));
+        m_out[o * nl + layer] = static_cast<float>(m_to_density[layer](transmittance));
     }
 
     void store_density(size_t layer, int64_t ix, int64_t iy, double covered_fraction) const
     {
-        const size_t nl = m_stock.layers.size();
-        const size_t o  = static_cast<size_t>((iy - m_roi.y_begin) * m_roi.width()
-                                             + (ix - m_roi.x_begin));
-        m_out[o * nl + layer] = static_cast<float>(density_from_transmittance(
-            1.0 - covered_fraction, m_stock.max_density, m_stock.layer_base_density(layer)));
+        store_transmittance(layer, ix, iy, 1.0 - covered_fraction);
     }
 
     /// MODEL.md 5: the covered fraction of each pixel of the tile by the
@@ -662,6 +661,8 @@ private:
     const std::vector<LayerPlan>& m_layers;
     float* m_out;
     Development m_development;
+    /// Each layer's density of a transmittance (MODEL.md 5).
+    std::vector<DensityFromTransmittance> m_to_density;
     std::vector<LayerCounters> m_counters;
     const std::atomic<bool>& m_stop;
 };

@@ -35,6 +35,7 @@ struct TileScratch {
     ExposurePlane plane;
     std::vector<double> values;
     std::vector<double> log_factor;  ///< per pixel, pixel scale of an inhibited layer
+    std::vector<double> edges_x, edges_y;  ///< the tile's scan pixel edges, um (pixel scale)
     /// Grains visited, for the stop check (poll_stop).
     uint32_t grains_seen = 0;
     /// A cell's grains, their mean photons, develop uniforms and decisions

@@ -38,22 +38,11 @@ double mean_transmittance(const Layer& layer, const std::vector<PixelPopulation>
     return layer_mean_transmittance(layer, population_covers(pops, v));
 }
 
-/// The smallest transmittance a density clamp of `max_density` lets through.
-double min_transmittance(double max_density)
-{
-    return std::pow(10.0, -max_density);
-}
-
-/// base - log10 of the transmittance, clamped at `min_t` (min_transmittance).
-double clamp_density(double transmittance, double base, double min_t)
-{
-    return base - std::log10(std::max(transmittance, min_t));
-}
 
 }  // namespace
 
 ExpectedCurveReader::ExpectedCurveReader(const ExpectedCurve& curve)
-    : m_curve(&curve), m_min_transmittance(min_transmittance(curve.max_density))
+    : m_curve(&curve), m_min_transmittance(DensityFromTransmittance(curve.max_density, 0.0).min_transmittance())
 {
     const std::vector<CurvePoint>& points = curve.points;
     if (points.size() >= 2) {
@@ -83,7 +72,7 @@ double ExpectedCurveReader::transmittance_at(double value) const
 
 double ExpectedCurveReader::density_at(double value) const
 {
-    return clamp_density(transmittance_at(value), m_curve->base_density, m_min_transmittance);
+    return clamped_density(transmittance_at(value), m_min_transmittance, m_curve->base_density);
 }
 
 double ExpectedCurveReader::transmittance_slope_at(double value) const
@@ -223,6 +212,7 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
     curve.layer        = stock.layers[l].name;
     curve.base_density = stock.layer_base_density(l);
     curve.max_density  = stock.max_density;
+    const DensityFromTransmittance to_density(stock.max_density, curve.base_density);
     const auto point = [&](double v) {
         CurvePoint c;
         c.value         = v;
@@ -233,8 +223,7 @@ ExpectedCurve expected_curve(const Stock& stock, size_t l, const LayerModel& mod
         } else {
             c.transmittance = mean_transmittance(stock.layers[l], pops, v);
         }
-        c.density       = clamp_density(c.transmittance, curve.base_density,
-                                        min_transmittance(stock.max_density));
+        c.density       = to_density(c.transmittance);
         return c;
     };
     curve.points.push_back(point(0.0));

@@ -106,39 +106,60 @@ double LayerExposure::value_at(double x_um, double y_um) const
     return value(static_cast<int64_t>(fx), static_cast<int64_t>(fy));
 }
 
+void LayerExposure::overlaps(double a_um, double b_um, int64_t pixels,
+                             std::vector<Overlap>& out) const
+{
+    out.clear();
+    const double p = m_pitch_um;
+    const double n = static_cast<double>(pixels);
+    const bool clamp = m_edge == FrameEdge::clamp;
+    // Every pixel the interval overlaps; with clamp, beyond the image the
+    // nearest edge pixel's.
+    const double f1 = clamp ? std::ceil(b_um / p) : std::min(std::ceil(b_um / p), n);
+    for (double f = clamp ? std::floor(a_um / p) : std::max(std::floor(a_um / p), 0.0); f < f1;
+         ++f) {
+        const double o = std::min(b_um, (f + 1) * p) - std::max(a_um, f * p);
+        if (o > 0.0)
+            out.push_back({ clamp ? std::clamp<int64_t>(pixel_index(f), 0, pixels - 1)
+                                  : static_cast<int64_t>(f),
+                            o });
+    }
+}
+
 double LayerExposure::mean_over_rect(double x0_um, double y0_um, double x1_um,
                                      double y1_um) const
 {
-    const double p  = m_pitch_um;
-    const double w  = static_cast<double>(m_input.frame_width());
-    const double h  = static_cast<double>(m_input.frame_height());
-    double sum = 0.0;
-    if (m_edge == FrameEdge::clamp) {
-        // Every pixel the rectangle overlaps, beyond the image reading the
-        // nearest edge pixel's v.
-        const double fx1 = std::ceil(x1_um / p), fy1 = std::ceil(y1_um / p);
-        for (double fy = std::floor(y0_um / p); fy < fy1; ++fy) {
-            const double oy = std::min(y1_um, (fy + 1) * p) - std::max(y0_um, fy * p);
-            for (double fx = std::floor(x0_um / p); fx < fx1; ++fx) {
-                const double ox = std::min(x1_um, (fx + 1) * p) - std::max(x0_um, fx * p);
-                if (ox > 0.0 && oy > 0.0)
-                    sum += ox * oy * value(clamp_x(pixel_index(fx)), clamp_y(pixel_index(fy)));
-            }
-        }
-    } else {
-        const double fx1 = std::min(std::ceil(x1_um / p), w);
-        const double fy1 = std::min(std::ceil(y1_um / p), h);
-        for (double fy = std::max(std::floor(y0_um / p), 0.0); fy < fy1; ++fy) {
-            const double oy = std::min(y1_um, (fy + 1) * p) - std::max(y0_um, fy * p);
-            for (double fx = std::max(std::floor(x0_um / p), 0.0); fx < fx1; ++fx) {
-                const double ox = std::min(x1_um, (fx + 1) * p) - std::max(x0_um, fx * p);
-                if (ox > 0.0 && oy > 0.0)
-                    sum += ox * oy * value(static_cast<int64_t>(fx), static_cast<int64_t>(fy));
-            }
+    double mean = 0.0;
+    means_over_grid({ x0_um, x1_um }, { y0_um, y1_um }, &mean);
+    return mean;
+}
+
+void LayerExposure::means_over_grid(const std::vector<double>& xs_um,
+                                    const std::vector<double>& ys_um, double* means) const
+{
+    if (xs_um.size() < 2 || ys_um.size() < 2)
+        return;
+    const size_t nx = xs_um.size() - 1, ny = ys_um.size() - 1;
+    // Each column's overlaps, end to end, and where each column's start.
+    std::vector<Overlap> all, one;
+    std::vector<size_t> column_start { 0 };
+    for (size_t i = 0; i < nx; ++i) {
+        overlaps(xs_um[i], xs_um[i + 1], m_input.frame_width(), one);
+        all.insert(all.end(), one.begin(), one.end());
+        column_start.push_back(all.size());
+    }
+    for (size_t j = 0; j < ny; ++j) {
+        overlaps(ys_um[j], ys_um[j + 1], m_input.frame_height(), one);
+        const double height_um = ys_um[j + 1] - ys_um[j];
+        for (size_t i = 0; i < nx; ++i) {
+            double sum = 0.0;
+            for (const Overlap& row : one)
+                for (size_t c = column_start[i]; c < column_start[i + 1]; ++c)
+                    sum += all[c].length_um * row.length_um * value(all[c].index, row.index);
+            const double area = (xs_um[i + 1] - xs_um[i]) * height_um;
+            means[j * nx + i] = area > 0.0 ? sum / area : 0.0;
         }
     }
-    const double area = (x1_um - x0_um) * (y1_um - y0_um);
-    return area > 0.0 ? sum / area : 0.0;
 }
 
 double LayerExposure::integrate_over_disc(double cx_um, double cy_um, double r_um) const

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "filmgrain/image.h"
 #include "filmgrain/render.h"
@@ -91,6 +92,13 @@ public:
     /// weighted by the overlap.
     double mean_over_rect(double x0_um, double y0_um, double x1_um, double y1_um) const;
 
+    /// mean_over_rect of every cell of a grid, row by row into `means`: the
+    /// rectangles [xs_um[i], xs_um[i + 1]] x [ys_um[j], ys_um[j + 1]]. Each
+    /// column's and row's overlaps are found once, not once a cell (the
+    /// same sums in the same order: the same values).
+    void means_over_grid(const std::vector<double>& xs_um, const std::vector<double>& ys_um,
+                         double* means) const;
+
     /// What lies beyond the image.
     FrameEdge edge() const { return m_edge; }
     /// The image pixel whose v a pixel index (any, beyond the image too)
@@ -99,6 +107,16 @@ public:
     int64_t clamp_y(int64_t iy) const { return std::clamp<int64_t>(iy, 0, m_input.frame_height() - 1); }
 
 private:
+    /// An input pixel (column or row; beyond the image with clamp, the
+    /// nearest edge one) that an interval overlaps, and by how much.
+    struct Overlap {
+        int64_t index;
+        double length_um;
+    };
+    /// The input pixels along one axis of `pixels` that [a_um, b_um]
+    /// overlaps by more than 0, in order (gate: only those of the image).
+    void overlaps(double a_um, double b_um, int64_t pixels, std::vector<Overlap>& out) const;
+
     /// integrate_over_disc of a disc inside the image's pixels [ix0, ix1] x
     /// [iy0, iy1], and of one reaching beyond the image (clamp).
     double integrate_over_pixels(double cx_um, double cy_um, double r_um, int64_t ix0,

@@ -2,6 +2,7 @@
 // integral against the box-reconstructed image.
 #include "model/exposure.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -66,6 +67,51 @@ TEST(LayerExposure, IntegratesAgainstTheBoxImage)
     EXPECT_EQ(ex.integrate_over_disc(-10, 15, 3), 0.0);
     // A disc over the whole image: the sum of value * pixel area.
     EXPECT_NEAR(ex.integrate_over_disc(20, 15, 1000), (1 + 2 + 3 + 4) * 3 * 100.0, 1e-6);
+}
+
+TEST(LayerExposure, GridMeansAreTheBoxImagesMeanOverEachCell)
+{
+    // 4x3 image, pitch 10 um, value 1 + x + 10 y at pixel (x, y). Cells of
+    // 7 um from x = -4 um and of 13 um from y = -6 um straddle pixels and
+    // reach past the image on every side.
+    std::vector<float> px(12);
+    for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 4; ++x)
+            px[y * 4 + x] = static_cast<float>(1 + x + 10 * y);
+    const ImageView view { px.data(), 4, 3, 1 };
+    std::vector<double> xs, ys;
+    for (int i = 0; i <= 8; ++i)
+        xs.push_back(-4.0 + 7.0 * i);
+    for (int j = 0; j <= 3; ++j)
+        ys.push_back(-6.0 + 13.0 * j);
+    // The mean over [x0, x1] x [y0, y1] as the sum over whole micrometre
+    // squares (every edge here is a whole micrometre) of the pixel each
+    // falls in: beyond the image the nearest pixel (clamp) or 0 (gate).
+    const auto expected = [&](FrameEdge edge, double x0, double y0, double x1, double y1) {
+        double sum = 0.0;
+        for (double y = y0; y < y1; ++y)
+            for (double x = x0; x < x1; ++x) {
+                const int ix = static_cast<int>(std::floor(x / 10.0));
+                const int iy = static_cast<int>(std::floor(y / 10.0));
+                if (edge == FrameEdge::gate && (ix < 0 || ix > 3 || iy < 0 || iy > 2))
+                    continue;
+                sum += 1 + std::clamp(ix, 0, 3) + 10 * std::clamp(iy, 0, 2);
+            }
+        return sum / ((x1 - x0) * (y1 - y0));
+    };
+    for (FrameEdge edge : { FrameEdge::clamp, FrameEdge::gate }) {
+        const LayerExposure ex(view, { 1.0, 0.0, 0.0 }, 10.0, 1e30, edge);
+        std::vector<double> means(8 * 3, -1.0);
+        ex.means_over_grid(xs, ys, means.data());
+        for (size_t j = 0; j < 3; ++j)
+            for (size_t i = 0; i < 8; ++i) {
+                const double e = expected(edge, xs[i], ys[j], xs[i + 1], ys[j + 1]);
+                EXPECT_NEAR(means[j * 8 + i], e, 1e-12 * e + 1e-15) << i << ", " << j;
+                // One cell alone: the same value, to the bit.
+                EXPECT_EQ(ex.mean_over_rect(xs[i], ys[j], xs[i + 1], ys[j + 1]),
+                          means[j * 8 + i]);
+            }
+    }
 }
 
 TEST(LayerExposure, SpecialValuesExposeNothingOrSaturate)

@@ -192,11 +192,15 @@ double lens_area_um2(double r_um, double h_um)
            - 0.5 * h * std::sqrt(std::max(0.0, 4.0 * r_um * r_um - h * h));
 }
 
+DensityFromTransmittance::DensityFromTransmittance(double max_density, double base_density)
+    : m_min_transmittance(std::pow(10.0, -max_density)), m_base_density(base_density)
+{
+}
+
 double density_from_transmittance(double transmittance, double max_density,
                                   double base_density)
 {
-    const double floor_t = std::pow(10.0, -max_density);
-    return -std::log10(std::max(transmittance, floor_t)) + base_density;
+    return DensityFromTransmittance(max_density, base_density)(transmittance);
 }
 
 }  // namespace filmgrain

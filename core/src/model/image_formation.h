@@ -6,6 +6,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -69,7 +70,32 @@ template<typename It, typename F> inline void for_each_union_interval(It first, 
 inline constexpr double kLog10E = 0.43429448190325176;
 
 /// Negative density from transmittance: D = -log10(max(T, 10^-max_density))
-/// + base_density (MODEL.md 5). The clamp is part of the model.
+/// + base_density (MODEL.md 5). The clamp is part of the model; here it is
+/// given as its smallest transmittance, min_transmittance = 10^-max_density.
+inline double clamped_density(double transmittance, double min_transmittance,
+                              double base_density)
+{
+    return -std::log10(std::max(transmittance, min_transmittance)) + base_density;
+}
+
+/// clamped_density of a layer, made once (its clamp is a pow) and applied
+/// to every pixel.
+class DensityFromTransmittance {
+public:
+    DensityFromTransmittance(double max_density, double base_density);
+    double operator()(double transmittance) const
+    {
+        return clamped_density(transmittance, m_min_transmittance, m_base_density);
+    }
+    /// 10^-max_density: the smallest transmittance the clamp lets through.
+    double min_transmittance() const { return m_min_transmittance; }
+
+private:
+    double m_min_transmittance;
+    double m_base_density;
+};
+
+/// DensityFromTransmittance(max_density, base_density)(transmittance).
 double density_from_transmittance(double transmittance, double max_density,
                                   double base_density);
 
