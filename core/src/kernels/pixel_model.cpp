@@ -614,6 +614,7 @@ PixelModel::Moments PixelModel::at(double v, double log_factor) const
     return lerp(row(p.r0), row(p.r1), p.tr);
 }
 
+template <int K>
 void PixelModel::draw_at(double v, double log_factor, Draw& out) const
 {
     const Position p = position(v, log_factor);
@@ -622,16 +623,18 @@ void PixelModel::draw_at(double v, double log_factor, Draw& out) const
     const double w[4] = { (1.0 - p.tr) * (1.0 - p.ti), (1.0 - p.tr) * p.ti, p.tr * (1.0 - p.ti),
                           p.tr * p.ti };
     double log_mean = 0.0, log_variance = 0.0;
-    out.taps.fill(0.0);
-    const int k = filter_lags(std::max(m_lags, 0));
     for (int c = 0; c < 4; ++c) {
         log_mean += w[c] * n[c]->log_mean;
         log_variance += w[c] * n[c]->log_variance;
-        for (int j = 0; j <= k; ++j)
-            for (int i = 0; i <= k; ++i)
-                out.taps[static_cast<size_t>(j * kLagSide + i)]
-                    += w[c] * n[c]->taps[static_cast<size_t>(j * kLagSide + i)];
     }
+    for (int j = 0; j <= K; ++j)
+        for (int i = 0; i <= K; ++i) {
+            const size_t t = static_cast<size_t>(j * kLagSide + i);
+            double tap = 0.0;
+            for (int c = 0; c < 4; ++c)
+                tap += w[c] * n[c]->taps[t];
+            out.taps[t] = tap;
+        }
     out.mean     = std::exp(log_mean);
     out.variance = std::exp(log_variance);
 }
@@ -728,6 +731,47 @@ double copula_normal_correlation(double mean, double variance, double rho)
     return 0.5 * (lo + hi);
 }
 
+namespace {
+
+/// sample_pixel_transmittance's draws, with its filter on K lags each way.
+template <int K>
+void draw_block(const PixelModel& model, int64_t tw, int64_t th, const double* v,
+                const double* log_factor, const double* z, double* transmittance)
+{
+    const int64_t zw = tw + 2 * K;
+    PixelModel::Draw d;
+    for (int64_t j = 0; j < th; ++j)
+        for (int64_t i = 0; i < tw; ++i) {
+            const size_t o = static_cast<size_t>(j * tw + i);
+            model.draw_at<K>(v[o], log_factor ? log_factor[o] : 0.0, d);
+            // The filter on the normals around (i, j): each tap (a, b)
+            // weighs the normals at (+-a, +-b); its sum of squares, which
+            // interpolation leaves within rounding of 1 only at nodes,
+            // normalises.
+            const double* centre = &z[static_cast<size_t>((j + K) * zw + i + K)];
+            double noise = 0.0, norm = 0.0;
+            for (int b = 0; b <= K; ++b)
+                for (int a = 0; a <= K; ++a) {
+                    const double t = d.taps[static_cast<size_t>(b * kLagSide + a)];
+                    const int64_t dx = a, dy = b * zw;
+                    double s = centre[dy + dx];
+                    if (a > 0)
+                        s += centre[dy - dx];
+                    if (b > 0) {
+                        s += centre[-dy + dx];
+                        if (a > 0)
+                            s += centre[-dy - dx];
+                    }
+                    noise += t * s;
+                    norm += multiplicity(a) * multiplicity(b) * t * t;
+                }
+            transmittance[o]
+                = skewed_draw(d.mean, d.variance, norm > 0.0 ? noise / std::sqrt(norm) : 0.0);
+        }
+}
+
+}  // namespace
+
 void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x0, int64_t y0,
                                 int64_t x1, int64_t y1, const double* v,
                                 const double* log_factor, double* transmittance)
@@ -747,35 +791,13 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
                 = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
         }
     normal_quantiles(u.data(), z.data(), z.size());
-    PixelModel::Draw d;
-    for (int64_t j = 0; j < th; ++j)
-        for (int64_t i = 0; i < tw; ++i) {
-            const size_t o = static_cast<size_t>(j * tw + i);
-            model.draw_at(v[o], log_factor ? log_factor[o] : 0.0, d);
-            // The filter on the normals around (i, j): each tap (a, b)
-            // weighs the normals at (+-a, +-b); its sum of squares, which
-            // interpolation leaves within rounding of 1 only at nodes,
-            // normalises.
-            const double* centre = &z[static_cast<size_t>((j + k) * zw + i + k)];
-            double noise = 0.0, norm = 0.0;
-            for (int b = 0; b <= k; ++b)
-                for (int a = 0; a <= k; ++a) {
-                    const double t = d.taps[static_cast<size_t>(b * kLagSide + a)];
-                    const int64_t dx = a, dy = b * zw;
-                    double s = centre[dy + dx];
-                    if (a > 0)
-                        s += centre[dy - dx];
-                    if (b > 0) {
-                        s += centre[-dy + dx];
-                        if (a > 0)
-                            s += centre[-dy - dx];
-                    }
-                    noise += t * s;
-                    norm += multiplicity(a) * multiplicity(b) * t * t;
-                }
-            transmittance[o]
-                = skewed_draw(d.mean, d.variance, norm > 0.0 ? noise / std::sqrt(norm) : 0.0);
-        }
+    static_assert(kMaxLag == 4, "draw_block is instantiated for lags 0 to 4");
+    switch (k) {  // filter_lags: 1 to kMaxLag
+    case 1: draw_block<1>(model, tw, th, v, log_factor, z.data(), transmittance); break;
+    case 2: draw_block<2>(model, tw, th, v, log_factor, z.data(), transmittance); break;
+    case 3: draw_block<3>(model, tw, th, v, log_factor, z.data(), transmittance); break;
+    default: draw_block<4>(model, tw, th, v, log_factor, z.data(), transmittance); break;
+    }
 }
 
 }  // namespace filmgrain

@@ -151,12 +151,13 @@ public:
     Moments at(double v, double log_factor = 0.0) const;
 
     /// What the pixel kernel draws a pixel from: its mean, variance and
-    /// copula filter (LagArray on filter_lags(lags()) lags), interpolated
-    /// like at().
+    /// copula filter (LagArray; taps on lags 0 to K = filter_lags(lags())
+    /// each way, the rest left as they were), interpolated like at().
     struct Draw {
         double mean = 0.0, variance = 0.0;
         LagArray taps {};
     };
+    template <int K>
     void draw_at(double v, double log_factor, Draw& out) const;
 
     /// Moments computed directly (no table): for tests and the table.
