@@ -655,10 +655,11 @@ struct SkewedLaw {
     double c1 = 0.0, c2 = 0.0, c3 = 0.0;
 };
 
-bool skewed_law(double mean, double variance, SkewedLaw& law)
+[[gnu::always_inline]] inline bool skewed_law(double mean, double variance, SkewedLaw& law)
 {
-    if (!(mean > 0.0 && mean < 1.0) || !(variance > 0.0))
-        return false;
+    // Every field computed whatever the answer (no branch: skewed_draws'
+    // loop is vectorised); where it is false they are not used.
+    const bool drawn = mean > 0.0 && mean < 1.0 && variance > 0.0;
     // (a + b z)^3 = (a^3 + 3 a b^2) + (3 a^2 b + 3 b^3) He1 + 3 a b^2 He2 + b^3 He3.
     const auto cube = [variance](double m, double& a, double& b, double& c1, double& c2,
                                  double& c3) {
@@ -682,12 +683,13 @@ bool skewed_law(double mean, double variance, SkewedLaw& law)
     law.c3             = (1.0 - w) * o3 + w * k3;
     const double v     = law.c1 * law.c1 + 2.0 * law.c2 * law.c2 + 6.0 * law.c3 * law.c3;
     law.scale          = v > 0.0 ? std::sqrt(variance / v) : 1.0;
-    return true;
+    return drawn;
 }
 
 }  // namespace
 
-double skewed_draw(double mean, double variance, double z)
+void skewed_draws(const double* mean, const double* variance, const double* z, double* out,
+                  size_t n)
 {
     // A fraction in [0, 1] with the model's mean and variance, skewed as
     // the Boolean model's pixels are where they are skewed most: where most
@@ -699,18 +701,28 @@ double skewed_draw(double mean, double variance, double z)
     // passes through 0 at a mean of 1/2 continuously (a switch from one
     // Gamma to its mirror there made pixels 24% too spread on VISION3
     // 500T's blue layer near that mean: docs/performance), and scaled about
-    // the mean to the model's variance.
-    SkewedLaw law;
-    if (!skewed_law(mean, variance, law))
-        return mean;
+    // the mean to the model's variance. No branch: the compiler vectorises
+    // the loop, and every lane computes what the scalar code would.
     const auto cube = [](double m, double a, double b, double z) {
         const double w = std::max(0.0, a + z * b);
         return m * w * w * w;
     };
-    const double w = law.weight_covered;
-    const double t = (1.0 - w) * cube(law.m_open, law.a_open, law.b_open, z)
-                     + w * (1.0 - cube(law.m_covered, law.a_covered, law.b_covered, -z));
-    return std::clamp(mean + law.scale * (t - mean), 0.0, 1.0);
+    for (size_t i = 0; i < n; ++i) {
+        SkewedLaw law;
+        const bool drawn = skewed_law(mean[i], variance[i], law);
+        const double w   = law.weight_covered;
+        const double t   = (1.0 - w) * cube(law.m_open, law.a_open, law.b_open, z[i])
+                         + w * (1.0 - cube(law.m_covered, law.a_covered, law.b_covered, -z[i]));
+        const double d   = std::clamp(mean[i] + law.scale * (t - mean[i]), 0.0, 1.0);
+        out[i]           = drawn ? d : mean[i];
+    }
+}
+
+double skewed_draw(double mean, double variance, double z)
+{
+    double t = mean;
+    skewed_draws(&mean, &variance, &z, &t, 1);
+    return t;
 }
 
 double copula_normal_correlation(double mean, double variance, double rho)
@@ -733,12 +745,15 @@ double copula_normal_correlation(double mean, double variance, double rho)
 
 namespace {
 
-/// sample_pixel_transmittance's draws, with its filter on K lags each way.
+/// sample_pixel_transmittance's draws, with its filter on K lags each way:
+/// each pixel's law and correlated normal, then all of the block's draws.
 template <int K>
 void draw_block(const PixelModel& model, int64_t tw, int64_t th, const double* v,
                 const double* log_factor, const double* z, double* transmittance)
 {
     const int64_t zw = tw + 2 * K;
+    const size_t n = static_cast<size_t>(tw * th);
+    std::vector<double> mean(n), variance(n), normal(n);
     PixelModel::Draw d;
     for (int64_t j = 0; j < th; ++j)
         for (int64_t i = 0; i < tw; ++i) {
@@ -765,9 +780,11 @@ void draw_block(const PixelModel& model, int64_t tw, int64_t th, const double* v
                     noise += t * s;
                     norm += multiplicity(a) * multiplicity(b) * t * t;
                 }
-            transmittance[o]
-                = skewed_draw(d.mean, d.variance, norm > 0.0 ? noise / std::sqrt(norm) : 0.0);
+            mean[o]     = d.mean;
+            variance[o] = d.variance;
+            normal[o]   = norm > 0.0 ? noise / std::sqrt(norm) : 0.0;
         }
+    skewed_draws(mean.data(), variance.data(), normal.data(), transmittance, n);
 }
 
 }  // namespace

@@ -226,6 +226,9 @@ private:
 /// the variance: skewed like a few covering images where mostly open, like
 /// a few holes where mostly covered, and continuously in between.
 double skewed_draw(double mean, double variance, double z);
+/// skewed_draw of n pixels: out[i] = skewed_draw(mean[i], variance[i], z[i]).
+void skewed_draws(const double* mean, const double* variance, const double* z, double* out,
+                  size_t n);
 
 /// The correlation two standard normals need for their skewed_draw's (same
 /// mean and variance) to have correlation `rho` in [0, 1]: skewed_draw is

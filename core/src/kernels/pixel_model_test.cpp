@@ -6,8 +6,10 @@
 #include "kernels/pixel_model.h"
 
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -501,6 +503,33 @@ TEST(PixelModel, SkewedDrawHasTheMeanAndVariance)
     for (const double z : { -3.0, -1.0, 0.0, 1.0, 3.0 })
         EXPECT_NEAR(skewed_draw(0.5 - 1e-9, 0.01, z), skewed_draw(0.5 + 1e-9, 0.01, z), 1e-6)
             << "z " << z;
+}
+
+// The batch of draws a block takes (vectorised: two or more pixels a
+// step, the rest one by one) gives every pixel what it would alone, to the
+// bit, at every offset in the batch: a pixel's value cannot depend on its
+// tile. Means and variances with no law (0, 1, no variance) included.
+TEST(PixelModel, BatchDrawsAreTheSingleDrawsToTheBit)
+{
+    std::vector<double> mean, variance, z;
+    Rng rng(7, Stage::cell);
+    for (int i = 0; i < 257; ++i) {
+        const int kind = i % 11;
+        mean.push_back(kind == 0 ? 0.0 : kind == 1 ? 1.0 : rng.uniform());
+        variance.push_back(kind == 2 ? 0.0 : 0.05 * rng.uniform() * rng.uniform());
+        z.push_back(normal_quantile(rng.uniform()));
+    }
+    for (size_t start : { size_t(0), size_t(1), size_t(3) }) {
+        const size_t n = mean.size() - start;
+        std::vector<double> batch(n, -1.0);
+        skewed_draws(&mean[start], &variance[start], &z[start], batch.data(), n);
+        for (size_t i = 0; i < n; ++i) {
+            const double one = skewed_draw(mean[start + i], variance[start + i], z[start + i]);
+            EXPECT_EQ(std::memcmp(&batch[i], &one, sizeof one), 0)
+                << "pixel " << start + i << ": " << batch[i] << " against " << one;
+            EXPECT_TRUE(batch[i] >= 0.0 && batch[i] <= 1.0);
+        }
+    }
 }
 
 // The copula's filter has the correlation it is given: Gaussian-shaped
