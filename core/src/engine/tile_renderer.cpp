@@ -168,7 +168,9 @@ public:
                     scratch.population_end.push_back(scratch.discs.size());
                     continue;
                 }
-                pop.grains.for_each_grain_near(reach_rect(rect, layer, pop), [&](const Grain& g) {
+                // Each bin's cells as far as its own grains' images reach.
+                pop.grains.for_each_grain_near(rect, std::max(1.0, layer.image_reach),
+                                               [&](const Grain& g) {
                     poll_stop(scratch.grains_seen);
                     const Disc disc { g.x_um, g.y_um, g.radius_um };
                     if (!image_touches_rect(layer, disc, rect))
@@ -264,41 +266,45 @@ private:
     };
 
     /// Cells of up to this many input pixels a side are filtered
-    /// (thin_filter): their bound reads at most (this + 2)^2 pixels of
+    /// (grain_filter): their bound reads at most (this + 2)^2 pixels of
     /// the plane.
-    static constexpr double kThinnedCellPitches = 4.0;
+    static constexpr double kFilteredCellPitches = 4.0;
 
-    /// Thinning a lit population with a curve to the grains that can
+    /// The disc integrals weight the plane's values by areas that sum to
+    /// pi r^2 to within the segment table's 1e-6 r^2 an edge: the filter's
+    /// bound of a grain's mean photons takes this relative margin.
+    static constexpr double kDiscAreaMargin = 1e-5;
+
+    /// Filtering a lit population with a curve to the grains that can
     /// develop: a grain of radius r in cell (b, cx, cy) absorbs on average
-    /// at most k v_max pi r^2 photons, v_max being the largest exposure
-    /// value over the pixels the discs of the cell's grains can touch (the
-    /// disc integrals weight the plane's values by areas summing to pi
-    /// r^2, to the segment table's 1e-6 r^2 an edge: hence a 1e-5 margin),
-    /// so it develops with probability at most the curve's bound there
+    /// at most k v_max pi r^2 photons (MODEL.md 2's mean, photon_mean, at
+    /// the largest value), v_max being the largest exposure value over the
+    /// pixels the discs of the cell's grains can touch (times 1 +
+    /// kDiscAreaMargin), so it develops with probability at most the curve's bound there
     /// (the inhibitors only lower it: log factor >= 0), and not at all when
     /// its uniform u < 1 - that bound. v_max comes from the tile's plane;
     /// a cell whose discs may reach beyond it, or of a bin whose cells are
-    /// wider than kThinnedCellPitches pixels, keeps every grain. Which
+    /// wider than kFilteredCellPitches pixels, keeps every grain. Which
     /// grains are dropped never changes an outcome: they cannot develop.
-    struct ThinFilter {
+    struct GrainFilter {
         const DevelopCurve* curve = nullptr;  ///< null: every grain kept
-        /// sqrt(k v_max pi (1 + 1e-5)): times r, the root of the bound of
-        /// a grain's mean photons.
-        double root_bound_per_r = 0.0;
+        /// sqrt(k v_max pi (1 + kDiscAreaMargin)), sqrt(photons) per um:
+        /// times r, the root of the bound of a grain's mean photons.
+        double root_photons_per_um = 0.0;
         explicit operator bool() const { return curve != nullptr; }
         /// Whether a grain of radius r and development bits u_bits can
         /// develop (as develop_fast reads u from them).
         bool operator()(double r_um, uint32_t u_bits) const
         {
             const double u = (static_cast<double>(u_bits) + 0.5) * 0x1.0p-32;
-            return u >= 1.0 - curve->probability_bound_at_root(root_bound_per_r * r_um);
+            return u >= 1.0 - curve->probability_bound_at_root(root_photons_per_um * r_um);
         }
     };
-    static ThinFilter thin_filter(const DevelopCurve& curve, double k,
-                                  const PopulationGrains::Bin& bin, const ExposurePlane& plane,
-                                  int64_t cx, int64_t cy)
+    static GrainFilter grain_filter(const DevelopCurve& curve, double k,
+                                    const PopulationGrains::Bin& bin, const ExposurePlane& plane,
+                                    int64_t cx, int64_t cy)
     {
-        if (!(bin.cell_um <= kThinnedCellPitches * plane.pitch_um()))
+        if (!(bin.cell_um <= kFilteredCellPitches * plane.pitch_um()))
             return {};
         const double r  = bin.max_radius_um;
         const double x0 = static_cast<double>(cx) * bin.cell_um;
@@ -307,7 +313,7 @@ private:
             = plane.max_over(x0 - r, y0 - r, x0 + bin.cell_um + r, y0 + bin.cell_um + r);
         if (!(v_max < std::numeric_limits<double>::infinity()))
             return {};
-        return { &curve, std::sqrt(k * v_max * M_PI * (1.0 + 1e-5)) };
+        return { &curve, std::sqrt(k * v_max * M_PI * (1.0 + kDiscAreaMargin)) };
     }
 
     /// develop_fast's exposure integral for the fog's thinned grains
@@ -317,18 +323,6 @@ private:
         void prepare(const FastGrains::Batch&, const uint32_t*, size_t) const {}
         double operator()(const FastGrains::Batch&, size_t, size_t) const { return 0.0; }
     };
-
-    /// The rectangle whose nearby grains (within their own radius) can have
-    /// an image reaching `rect`: `rect` itself for silver, grown by the
-    /// clouds' extra reach for dye (MODEL.md 8).
-    static RectUm reach_rect(const RectUm& rect, const LayerPlan& layer,
-                             const PopulationPlan& pop)
-    {
-        if (layer.image_reach <= 1.0)
-            return rect;
-        const double m = (layer.image_reach - 1.0) * pop.grains.max_radius_um();
-        return { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m, rect.y1_um + m };
-    }
 
     /// Whether a grain's image (its disc, or its cloud) touches `rect`.
     static bool image_touches_rect(const LayerPlan& layer, const Disc& grain, const RectUm& rect)
@@ -370,12 +364,12 @@ private:
         std::vector<Disc>& discs  = scratch.discs;
         size_t nd                 = discs.size();
         // A lit population with a curve: of each cell only the grains that
-        // can develop (thin_filter) are positioned and decided; the others
+        // can develop (grain_filter) are positioned and decided; the others
         // are counted.
-        const ExposurePlane* thin_plane = !kFog && curve ? &scratch.plane : nullptr;
+        const ExposurePlane* filter_plane = !kFog && curve ? &scratch.plane : nullptr;
         const auto filter_of = [&](size_t bin, int64_t cx, int64_t cy) {
-            return thin_plane ? thin_filter(*curve, k, pop.fast->bins()[bin], *thin_plane, cx, cy)
-                              : ThinFilter {};
+            return filter_plane ? grain_filter(*curve, k, pop.fast->bins()[bin], *filter_plane, cx, cy)
+                              : GrainFilter {};
         };
         // Each bin's cells as far as its own grains' images reach.
         pop.fast->for_each_cell_batch(

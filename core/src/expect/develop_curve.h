@@ -45,18 +45,13 @@ public:
         return m_p[i] + f * (m_p[i + 1] - m_p[i]);
     }
 
-    /// An upper bound of probability(l) over every 0 <= l <= lambda: the
-    /// largest node value up to the node at or after lambda (linear
-    /// interpolation never exceeds its two nodes, and the tabulated chain
-    /// need not make the curve monotonic); 1 beyond lambda_max(), where
-    /// grains are decided from their photon count. For thinning the grain
-    /// process to the grains that can develop (tile_renderer.cpp).
-    double probability_bound(double lambda) const
-    {
-        return probability_bound_at_root(std::sqrt(std::max(lambda, 0.0)));
-    }
-    /// probability_bound(s^2) for s >= 0 (the nodes are even in s: no root
-    /// to take where s is known).
+    /// An upper bound of probability(l) over every 0 <= l <= s^2, given
+    /// s = sqrt(lambda) >= 0 (the nodes are even in s: no root to take
+    /// where s is known): the largest node value up to the node at or
+    /// after s (linear interpolation never exceeds its two nodes, and the
+    /// tabulated chain need not make the curve monotonic); 1 beyond
+    /// lambda_max(), where grains are decided from their photon count. For
+    /// filtering out the grains that cannot develop (tile_renderer.cpp).
     double probability_bound_at_root(double s) const
     {
         if (!(s <= m_root_lambda_max))

@@ -63,9 +63,9 @@ size_t FastGrains::drawn_within(const Batch& batch, const RectUm& rect) const
     const double cell_um = m_grains.bins()[batch.bin].cell_um;
     const double x0 = static_cast<double>(batch.cx) * cell_um;
     const double y0 = static_cast<double>(batch.cy) * cell_um;
-    // The positions as for_each_cell_batch draws them, x0 + bits * scale,
-    // lie in [x0, x0 + cell_um] (the top only by rounding): the cell's
-    // count where that lies strictly inside or outside.
+    // The positions (grain_position: x0 + bits * scale) lie in [x0, x0 +
+    // cell_um] (the top only by rounding): the cell's count where that
+    // lies strictly inside or outside.
     if (x0 >= rect.x0_um && x0 + cell_um < rect.x1_um && y0 >= rect.y0_um
         && y0 + cell_um < rect.y1_um)
         return batch.drawn;
@@ -74,9 +74,9 @@ size_t FastGrains::drawn_within(const Batch& batch, const RectUm& rect) const
         return 0;
     const double scale = cell_um * 0x1.0p-32;
     for (size_t i = 0; i < batch.drawn; ++i) {
-        const uint64_t w0 = counter_u64(batch.cell, 2 * i);
-        count += inside(x0 + static_cast<double>(w0 & 0xffffffffu) * scale,
-                        y0 + static_cast<double>(w0 >> 32) * scale);
+        double x, y;
+        grain_position(batch.cell, i, x0, y0, scale, x, y);
+        count += inside(x, y);
     }
     return count;
 }

@@ -86,7 +86,7 @@ public:
     /// grains it keeps (same values, same identities, in order; batch.drawn
     /// counts them all), and only their positions are drawn. For kernels
     /// that can tell from radius and uniform alone that a grain will not
-    /// develop (tile_renderer.cpp's thinning).
+    /// develop (tile_renderer.cpp's grain filter).
     template<typename FilterOf, typename Visit>
     void for_each_cell_batch(const RectUm& rect, double reach, Batch& batch, FilterOf&& filter_of,
                              Visit&& visit) const;
@@ -101,6 +101,16 @@ public:
     const std::vector<PopulationGrains::Bin>& bins() const { return m_grains.bins(); }
 
 private:
+    /// Grain i's centre, drawn from its cell's counter word 2 i: in the
+    /// cell whose corner is (x0_um, y0_um), scale_um = cell side / 2^32.
+    static void grain_position(uint64_t cell, uint64_t i, double x0_um, double y0_um,
+                               double scale_um, double& x_um, double& y_um)
+    {
+        const uint64_t w0 = counter_u64(cell, 2 * i);
+        x_um = x0_um + static_cast<double>(w0 & 0xffffffffu) * scale_um;
+        y_um = y0_um + static_cast<double>(w0 >> 32) * scale_um;
+    }
+
     PopulationGrains m_grains;
     int m_quantiles = 0;
     /// Per bin: radius at u = k / quantiles, k = 0..quantiles, and a copy of
@@ -162,11 +172,8 @@ void FastGrains::for_each_cell_batch(const RectUm& rect, double reach, Batch& ba
             else
                 m += !keep || keep(r_um, u);
         }
-        for (size_t j = 0; j < m; ++j) {
-            const uint64_t w0 = counter_u64(cell, 2 * static_cast<uint64_t>(index[j]));
-            xs[j] = x0 + static_cast<double>(w0 & 0xffffffffu) * scale;
-            ys[j] = y0 + static_cast<double>(w0 >> 32) * scale;
-        }
+        for (size_t j = 0; j < m; ++j)
+            grain_position(cell, index[j], x0, y0, scale, xs[j], ys[j]);
         batch.n = m;
         visit(static_cast<const Batch&>(batch));
     }, reach);

@@ -124,10 +124,10 @@ TEST(FastGrains, ACellsGrainsDoNotDependOnTheRegionAsked)
 
 TEST(DevelopCurve, ProbabilityBoundHoldsOverEveryLowerMean)
 {
-    // The thinning's bound (tile_renderer.cpp): probability_bound(l) >=
-    // probability(l') for every l' <= l, on a grid 16 times finer than the
-    // nodes (the running maximum taken on that grid), and from the square
-    // root alike; 1 beyond lambda_max, where grains need their count.
+    // The grain filter's bound (tile_renderer.cpp): probability_bound_at_-
+    // root(sqrt(l)) >= probability(l') for every l' <= l, on a grid 16
+    // times finer than the nodes (the running maximum taken on that grid);
+    // 1 beyond lambda_max, where grains need their count.
     const DevelopTable table = small_develop_table();
     const DevelopCurve curve(table);
     const double root_max = std::sqrt(curve.lambda_max());
@@ -136,15 +136,14 @@ TEST(DevelopCurve, ProbabilityBoundHoldsOverEveryLowerMean)
     for (int i = 0; i <= steps; ++i) {
         const double s = root_max * i / steps;
         running        = std::max(running, curve.probability(s * s));
-        ASSERT_GE(curve.probability_bound(s * s), running) << "lambda " << s * s;
         ASSERT_GE(curve.probability_bound_at_root(s), running) << "lambda " << s * s;
         // Not a loose bound: at most the curve's largest value up to two
         // node steps further.
         const double ahead = std::min(root_max, s + 2.0 * root_max / curve.node_count());
-        ASSERT_LE(curve.probability_bound(s * s),
+        ASSERT_LE(curve.probability_bound_at_root(s),
                   std::max(running, curve.probability(ahead * ahead)) + 1e-12);
     }
-    EXPECT_EQ(curve.probability_bound(curve.lambda_max() * 1.0001), 1.0);
+    EXPECT_EQ(curve.probability_bound_at_root(std::sqrt(curve.lambda_max() * 1.0001)), 1.0);
     EXPECT_EQ(curve.probability_bound_at_root(std::numeric_limits<double>::infinity()), 1.0);
     EXPECT_EQ(curve.probability_bound_at_root(std::nan("")), 1.0);
 }

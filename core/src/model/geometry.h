@@ -128,8 +128,14 @@ public:
     /// Calls visit(const Grain&) for every grain whose centre lies within its
     /// bin's largest radius of `rect` (a superset of the grains whose discs
     /// touch it), in a fixed global order: bin, cell row, cell column, index.
-    /// The visitor decides what touches.
-    template<typename Visit> void for_each_grain_near(const RectUm& rect, Visit&& visit) const;
+    /// The visitor decides what touches. `reach`: as for_each_cell_near.
+    template<typename Visit>
+    void for_each_grain_near(const RectUm& rect, Visit&& visit) const
+    {
+        for_each_grain_near(rect, 1.0, visit);
+    }
+    template<typename Visit>
+    void for_each_grain_near(const RectUm& rect, double reach, Visit&& visit) const;
 
     /// Calls visit(bin, cx, cy) for every cell whose grains may reach
     /// `rect` (centres within the bin's largest radius of it, times `reach`
@@ -187,15 +193,18 @@ void PopulationGrains::for_each_cell_near(const RectUm& rect, Visit&& visit, dou
 }
 
 template<typename Visit>
-void PopulationGrains::for_each_grain_near(const RectUm& rect, Visit&& visit) const
+void PopulationGrains::for_each_grain_near(const RectUm& rect, double reach, Visit&& visit) const
 {
     std::vector<Grain> grains;
-    for_each_cell_near(rect, [&](size_t b, int64_t cx, int64_t cy) {
-        grains.clear();
-        cell_grains(b, cx, cy, grains);
-        for (const Grain& g : grains)
-            visit(g);
-    });
+    for_each_cell_near(
+        rect,
+        [&](size_t b, int64_t cx, int64_t cy) {
+            grains.clear();
+            cell_grains(b, cx, cy, grains);
+            for (const Grain& g : grains)
+                visit(g);
+        },
+        reach);
 }
 
 }  // namespace filmgrain
