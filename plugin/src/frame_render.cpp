@@ -199,7 +199,7 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                       { "shutter_s", sc.shutter_s },
                       { "frame_width_mm", sc.width_mm },
                       { "seed", sc.seed },
-                      { "frame", sc.frame ? Json(*sc.frame) : Json(nullptr) },
+                      { "frame", frame_json<Json>(sc.frame) },
                       { "static", sc.static_grain },
                       { "edge", frame_edge_name(sc.edge) } };
     j["engine"]   = { { "engine", engine_name(e.engine) },

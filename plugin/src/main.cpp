@@ -24,6 +24,7 @@
 #include "frame_render.h"
 #include "input_image.h"
 #include "sequence.h"
+#include "stats_json.h"
 
 namespace filmgrain::cli {
 
@@ -101,8 +102,7 @@ int render(const CliArgs& a, const Console& con)
                     refusal = st.message();
             }
             const nlohmann::ordered_json line
-                = { { "frame", job.frame ? nlohmann::ordered_json(*job.frame)
-                                         : nlohmann::ordered_json(nullptr) },
+                = { { "frame", frame_json<nlohmann::ordered_json>(job.frame) },
                     { "input", a.wedge   ? std::string("wedge")
                                : a.chart ? std::string("chart")
                                          : job.input },
@@ -144,8 +144,7 @@ int render(const CliArgs& a, const Console& con)
         missing += outcome == FrameOutcome::missing;
         if (a.report_json)
             std::cout << nlohmann::ordered_json {
-                { "frame", job.frame ? nlohmann::ordered_json(*job.frame)
-                                     : nlohmann::ordered_json(nullptr) },
+                { "frame", frame_json<nlohmann::ordered_json>(job.frame) },
                 { "output", job.output },
                 { "outcome", frame_outcome_name(outcome) },
                 { "seconds", seconds_since(t_frame) } }

@@ -16,7 +16,7 @@ std::string stats_json(const RunReport& r)
     j["output"]         = r.output;
     j["stock"]          = r.stock_name;
     j["seed"]           = r.scene.seed;
-    j["frame"]          = r.scene.frame ? Json(*r.scene.frame) : Json(nullptr);
+    j["frame"]          = frame_json<Json>(r.scene.frame);
     j["static_grain"]   = r.scene.static_grain;
     j["grain_seed"]     = grain_seed(r.scene);
     j["exposure_stops"] = r.scene.exposure_stops;

@@ -63,6 +63,15 @@ struct RunReport {
 /// The report as a pretty-printed JSON object (ends with a newline).
 std::string stats_json(const RunReport& report);
 
+/// A frame number as the JSON documents give it (--stats, the settings hash,
+/// --dry-run and --report-json lines): the number, or null when there is
+/// none (a single image). Json is nlohmann::ordered_json: a template, so that
+/// this header needs no JSON library.
+template<typename Json, typename Int> Json frame_json(const std::optional<Int>& frame)
+{
+    return frame ? Json(*frame) : Json(nullptr);
+}
+
 /// Fills report.scan (the display window's scan) and report.data_window*
 /// (IBA::data_window_scan) for an input of header `spec` rendered with
 /// `opts`: what the CLI and the Python module report alike.
