@@ -24,6 +24,7 @@ a render within about a tenth of a second.
 import json
 import numbers
 import os
+import sys
 import warnings
 
 import numpy as np
@@ -162,6 +163,20 @@ def _format_value(key, value):
     return text
 
 
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def _outside_stacklevel():
+    """warnings.warn's stacklevel for a warning issued by the function that
+    calls this one, naming the first caller outside this package: the
+    user's code, whatever the depth of the package's own calls between."""
+    frame, level = sys._getframe(1), 1
+    while (frame is not None
+           and os.path.dirname(os.path.abspath(frame.f_code.co_filename)) == _PACKAGE_DIR):
+        frame, level = frame.f_back, level + 1
+    return level
+
+
 def _renamed(modifiers):
     """modifiers with the CLI's renamed modifiers (exposure, shutter,
     static: now exposure_stops, shutter_s, static_grain) under their new
@@ -174,7 +189,7 @@ def _renamed(modifiers):
         if out.get(new) is not None:
             raise TypeError(f"{old}= and {new}= name the same modifier ({old} is its old name)")
         warnings.warn(f"filmgrain: {old}= is now {new}= (the old name is still read)",
-                      DeprecationWarning, stacklevel=5)
+                      DeprecationWarning, stacklevel=_outside_stacklevel())
         out[new] = out.pop(old)
     return out
 
