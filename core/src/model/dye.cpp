@@ -165,6 +165,7 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
     std::vector<std::pair<double, int>>& enters = scratch.enters;
     std::vector<std::pair<double, int>>& leaves = scratch.leaves;
     std::vector<size_t>& by_x = scratch.by_x;
+    std::vector<std::vector<size_t>>& crossing = scratch.crossing;
     const auto pop_of = [&](size_t grain) -> uint8_t { return population ? population[grain] : 0; };
     scratch.level.clear();
     std::vector<double> sum(static_cast<size_t>(tw));
@@ -181,21 +182,40 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
         std::sort(by_x.begin(), by_x.end(), [&](size_t p, size_t q) {
             return grains[p].x_um < grains[q].x_um || (grains[p].x_um == grains[q].x_um && p < q);
         });
+        // The sample rows each cloud crosses (|y - y_c| < r_c), found from
+        // its extent (a row more each way, then the exact test): each row
+        // then reads only its own clouds, still by centre.
+        const auto sample_y = [&](int64_t j) {
+            return (static_cast<double>(row * s + j) + 0.5) * sy;
+        };
+        crossing.resize(static_cast<size_t>(s));
+        for (std::vector<size_t>& c : crossing)
+            c.clear();
+        const double first = static_cast<double>(row * s);
+        for (const size_t gi : by_x) {
+            const Disc& g   = grains[gi];
+            const double rc = layer.cloud_diameter_ratio * g.r_um;
+            const double lo = std::floor((g.y_um - rc) / sy - 0.5 - first) - 1.0;
+            const double hi = std::ceil((g.y_um + rc) / sy - 0.5 - first) + 1.0;
+            const int64_t j1 = static_cast<int64_t>(std::min(hi, static_cast<double>(s - 1)));
+            for (int64_t j = static_cast<int64_t>(std::max(lo, 0.0)); j <= j1; ++j)
+                if (std::fabs(sample_y(j) - g.y_um) < rc)
+                    crossing[static_cast<size_t>(j)].push_back(gi);
+        }
         for (int64_t j = 0; j < s; ++j) {
-            const double y = (static_cast<double>(row * s + j) + 0.5) * sy;
+            const double y = sample_y(j);
+            const std::vector<size_t>& clouds = crossing[static_cast<size_t>(j)];
             // Room for every cloud's ends, written through pointers (no
             // size kept in memory per end), then cut to what was written.
-            enters.resize(by_x.size());
-            leaves.resize(by_x.size());
+            enters.resize(clouds.size());
+            leaves.resize(clouds.size());
             std::pair<double, int>* enter = enters.data();
             std::pair<double, int>* leave = leaves.data();
             Counter count(layer, max_density, scratch);  // clouds covering the block's left edge
-            for (const size_t gi : by_x) {
+            for (const size_t gi : clouds) {
                 const Disc& g   = grains[gi];
                 const double rc = layer.cloud_diameter_ratio * g.r_um;
                 const double dy = y - g.y_um;
-                if (std::fabs(dy) >= rc)
-                    continue;
                 const double half = std::sqrt(rc * rc - dy * dy);
                 const double a = g.x_um - half, c = g.x_um + half;
                 if (c <= left || a >= right)

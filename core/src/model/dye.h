@@ -139,6 +139,8 @@ struct DyeScratch {
     std::vector<int64_t> density;  ///< fixed point, 2^-32 density units
     std::vector<std::pair<double, int>> ends, enters, leaves;
     std::vector<size_t> by_x;  ///< a pixel row's clouds, by centre
+    /// Per sample row of a pixel row: the clouds it crosses, by centre.
+    std::vector<std::vector<size_t>> crossing;
     std::vector<std::pair<uint64_t, double>> memo;  ///< coupler-limited transmittances
     std::vector<double> level, factor;
 };
