@@ -291,7 +291,14 @@ private:
         /// sqrt(k v_max pi (1 + kDiscAreaMargin)), sqrt(photons) per um:
         /// times r, the root of the bound of a grain's mean photons.
         double root_photons_per_um = 0.0;
+        /// 1 - the bound at the cell's largest radius: a grain whose u is
+        /// below it cannot develop, whatever its radius.
+        double min_u = 0.0;
         explicit operator bool() const { return curve != nullptr; }
+        bool may_keep(uint32_t u_bits) const
+        {
+            return (static_cast<double>(u_bits) + 0.5) * 0x1.0p-32 >= min_u;
+        }
         /// Whether a grain of radius r and development bits u_bits can
         /// develop (as develop_fast reads u from them).
         bool operator()(double r_um, uint32_t u_bits) const
@@ -300,10 +307,10 @@ private:
             return u >= 1.0 - curve->probability_bound_at_root(root_photons_per_um * r_um);
         }
     };
-    static GrainFilter grain_filter(const DevelopCurve& curve, double k,
-                                    const PopulationGrains::Bin& bin, const ExposurePlane& plane,
-                                    int64_t cx, int64_t cy)
+    static GrainFilter grain_filter(const DevelopCurve& curve, double k, const FastGrains& fast,
+                                    size_t b, const ExposurePlane& plane, int64_t cx, int64_t cy)
     {
+        const PopulationGrains::Bin& bin = fast.bins()[b];
         if (!(bin.cell_um <= kFilteredCellPitches * plane.pitch_um()))
             return {};
         const double r  = bin.max_radius_um;
@@ -313,7 +320,13 @@ private:
             = plane.max_over(x0 - r, y0 - r, x0 + bin.cell_um + r, y0 + bin.cell_um + r);
         if (!(v_max < std::numeric_limits<double>::infinity()))
             return {};
-        return { &curve, std::sqrt(k * v_max * M_PI * (1.0 + kDiscAreaMargin)) };
+        GrainFilter f { &curve, std::sqrt(k * v_max * M_PI * (1.0 + kDiscAreaMargin)) };
+        // The bound grows with r: at the table's largest radius (a hair
+        // more, for the interpolation's rounding) it holds every grain's.
+        f.min_u = 1.0
+                  - curve.probability_bound_at_root(f.root_photons_per_um
+                                                    * fast.largest_radius_um(b) * (1.0 + 1e-9));
+        return f;
     }
 
     /// develop_fast's exposure integral for the fog's thinned grains
@@ -368,7 +381,7 @@ private:
         // are counted.
         const ExposurePlane* filter_plane = !kFog && curve ? &scratch.plane : nullptr;
         const auto filter_of = [&](size_t bin, int64_t cx, int64_t cy) {
-            return filter_plane ? grain_filter(*curve, k, pop.fast->bins()[bin], *filter_plane, cx, cy)
+            return filter_plane ? grain_filter(*curve, k, *pop.fast, bin, *filter_plane, cx, cy)
                               : GrainFilter {};
         };
         // Each bin's cells as far as its own grains' images reach.

@@ -84,7 +84,9 @@ public:
     /// either nullptr (every grain) or a predicate keep(r_um, u_bits) on a
     /// grain's radius and development bits; the batch then holds only the
     /// grains it keeps (same values, same identities, in order; batch.drawn
-    /// counts them all), and only their positions are drawn. For kernels
+    /// counts them all), and only their positions are drawn. A predicate
+    /// with may_keep(u_bits) false keeps no grain of those bits whatever
+    /// its radius, which is then not drawn. For kernels
     /// that can tell from radius and uniform alone that a grain will not
     /// develop (tile_renderer.cpp's grain filter).
     template<typename FilterOf, typename Visit>
@@ -99,6 +101,12 @@ public:
 
     /// The bins, as PopulationGrains has them.
     const std::vector<PopulationGrains::Bin>& bins() const { return m_grains.bins(); }
+    /// The largest radius the table gives a grain of bin b (its top node;
+    /// an interpolated radius exceeds it by rounding at most).
+    double largest_radius_um(size_t b) const
+    {
+        return m_radius[b][static_cast<size_t>(m_quantiles)];
+    }
 
 private:
     /// Grain i's centre, drawn from its cell's counter word 2 i: in the
@@ -160,10 +168,14 @@ void FastGrains::for_each_cell_batch(const RectUm& rect, double reach, Batch& ba
         size_t m = 0;
         for (size_t i = 0; i < batch.drawn; ++i) {
             const uint64_t w1 = counter_u64(cell, 2 * i + 1);
+            const uint32_t u  = static_cast<uint32_t>(w1 >> 32);
+            // A grain the filter drops whatever its radius: no radius.
+            if constexpr (!std::is_same_v<std::decay_t<decltype(keep)>, std::nullptr_t>)
+                if (keep && !keep.may_keep(u))
+                    continue;
             const double t    = static_cast<double>(w1 & 0xffffffffu) * q;
             const size_t k    = static_cast<size_t>(t);
             const double r_um = radius[k] + (t - static_cast<double>(k)) * (radius[k + 1] - radius[k]);
-            const uint32_t u  = static_cast<uint32_t>(w1 >> 32);
             rs[m]    = r_um;
             us[m]    = u;
             index[m] = static_cast<uint32_t>(i);

@@ -160,8 +160,10 @@ TEST(FastGrains, AFilterKeepsTheSameGrainsAndCountsTheRest)
     const FastGrains fast(grains);
     const RectUm region { 3.0, 5.0, 23.0, 19.0 };
     const double median_r = grains.radius_at_z_um(0.0);
+    // Some bits keep a grain whatever its radius, some only large grains,
+    // the rest none (may_keep false: their radius is never drawn).
     const auto keep = [&](double r_um, uint32_t u_bits) {
-        return r_um > median_r || (u_bits & 3u) == 0;
+        return (u_bits & 3u) == 0 || (r_um > median_r && (u_bits & 4u) == 0);
     };
     struct Kept {
         double x, y, r;
@@ -189,6 +191,7 @@ TEST(FastGrains, AFilterKeepsTheSameGrainsAndCountsTheRest)
     struct Keep {
         const decltype(keep)& f;
         explicit operator bool() const { return true; }
+        bool may_keep(uint32_t u) const { return (u & 3u) == 0 || (u & 4u) == 0; }
         bool operator()(double r, uint32_t u) const { return f(r, u); }
     };
     fast.for_each_cell_batch(
