@@ -280,9 +280,9 @@ private:
     /// at most k v_max pi r^2 photons (MODEL.md 2's mean, photon_mean, at
     /// the largest value), v_max being the largest exposure value over the
     /// pixels the discs of the cell's grains can touch (times 1 +
-    /// kDiscAreaMargin), so it develops with probability at most the curve's bound there
-    /// (the inhibitors only lower it: log factor >= 0), and not at all when
-    /// its uniform u < 1 - that bound. v_max comes from the tile's plane;
+    /// kDiscAreaMargin), so it develops with probability at most the
+    /// curve's bound there (the inhibitors only lower it: log factor >= 0),
+    /// and not at all when its uniform u < 1 - that bound. v_max comes from the tile's plane;
     /// a cell whose discs may reach beyond it, or of a bin whose cells are
     /// wider than kFilteredCellPitches pixels, keeps every grain. Which
     /// grains are dropped never changes an outcome: they cannot develop.
@@ -313,7 +313,9 @@ private:
         const PopulationGrains::Bin& bin = fast.bins()[b];
         if (!(bin.cell_um <= kFilteredCellPitches * plane.pitch_um()))
             return {};
-        const double r  = bin.max_radius_um;
+        // The cell's largest radius (the table's top node may differ from
+        // the bin's by rounding).
+        const double r  = std::max(bin.max_radius_um, fast.largest_radius_um(b));
         const double x0 = static_cast<double>(cx) * bin.cell_um;
         const double y0 = static_cast<double>(cy) * bin.cell_um;
         const double v_max
@@ -321,11 +323,10 @@ private:
         if (!(v_max < std::numeric_limits<double>::infinity()))
             return {};
         GrainFilter f { &curve, std::sqrt(k * v_max * M_PI * (1.0 + kDiscAreaMargin)) };
-        // The bound grows with r: at the table's largest radius (a hair
+        // The bound grows with r: at the cell's largest radius (a hair
         // more, for the interpolation's rounding) it holds every grain's.
         f.min_u = 1.0
-                  - curve.probability_bound_at_root(f.root_photons_per_um
-                                                    * fast.largest_radius_um(b) * (1.0 + 1e-9));
+                  - curve.probability_bound_at_root(f.root_photons_per_um * r * (1.0 + 1e-9));
         return f;
     }
 
@@ -382,7 +383,7 @@ private:
         const ExposurePlane* filter_plane = !kFog && curve ? &scratch.plane : nullptr;
         const auto filter_of = [&](size_t bin, int64_t cx, int64_t cy) {
             return filter_plane ? grain_filter(*curve, k, *pop.fast, bin, *filter_plane, cx, cy)
-                              : GrainFilter {};
+                                : GrainFilter {};
         };
         // Each bin's cells as far as its own grains' images reach.
         pop.fast->for_each_cell_batch(

@@ -808,7 +808,7 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
                 = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
         }
     normal_quantiles(u.data(), z.data(), z.size());
-    static_assert(kMaxLag == 4, "draw_block is instantiated for lags 0 to 4");
+    static_assert(kMaxLag == 4, "draw_block is instantiated for 1 to 4 lags");
     switch (k) {  // filter_lags: 1 to kMaxLag
     case 1: draw_block<1>(model, tw, th, v, log_factor, z.data(), transmittance); break;
     case 2: draw_block<2>(model, tw, th, v, log_factor, z.data(), transmittance); break;
