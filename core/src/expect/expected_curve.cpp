@@ -38,11 +38,11 @@ double mean_transmittance(const Layer& layer, const std::vector<PixelPopulation>
     return layer_mean_transmittance(layer, population_covers(pops, v));
 }
 
-
 }  // namespace
 
 ExpectedCurveReader::ExpectedCurveReader(const ExpectedCurve& curve)
-    : m_curve(&curve), m_min_transmittance(DensityFromTransmittance(curve.max_density, 0.0).min_transmittance())
+    : m_curve(&curve)
+    , m_min_transmittance(DensityFromTransmittance(curve.max_density, 0.0).min_transmittance())
 {
     const std::vector<CurvePoint>& points = curve.points;
     if (points.size() >= 2) {

@@ -86,9 +86,9 @@ public:
     /// grains it keeps (same values, same identities, in order; batch.drawn
     /// counts them all), and only their positions are drawn. A predicate
     /// with may_keep(u_bits) false keeps no grain of those bits whatever
-    /// its radius, which is then not drawn. For kernels
-    /// that can tell from radius and uniform alone that a grain will not
-    /// develop (tile_renderer.cpp's grain filter).
+    /// its radius, which is then not drawn. For kernels that can tell from
+    /// radius and uniform alone that a grain will not develop
+    /// (tile_renderer.cpp's grain filter).
     template<typename FilterOf, typename Visit>
     void for_each_cell_batch(const RectUm& rect, double reach, Batch& batch, FilterOf&& filter_of,
                              Visit&& visit) const;
