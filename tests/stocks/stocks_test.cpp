@@ -15,6 +15,7 @@
 #include "expect/expected_curve_model.h"
 #include "model/dye.h"
 #include "fit.h"
+#include "recipe.h"
 #include "filmgrain/render.h"
 
 namespace filmgrain {
@@ -741,6 +742,109 @@ TEST(Fitter, RenderCheckRendersALayerAloneAsInTheWholeStock)
     coupled.inhibition[0][2] = 0.1;
     EXPECT_FALSE(fit::layer_develops_alone(coupled, 0));
     EXPECT_TRUE(fit::layer_develops_alone(coupled, 2));
+}
+
+// The recipe (issue 43): what filmgrain-fit chooses for the options a user
+// leaves unset, by the datasheet's kind and figures.
+TEST(Recipe, GranularitySpreadIsTheLargestRatioAtTheLowestSharedDensity)
+{
+    // VISION3 500T at net 0.5: B 25.1, R 7.1; 250D: B 13.1, R 7.2.
+    EXPECT_DOUBLE_EQ(fit::granularity_spread_across_layers(
+                         datasheet("kodak-vision3-500t-5219.json")),
+                     25.1 / 7.1);
+    EXPECT_DOUBLE_EQ(fit::granularity_spread_across_layers(
+                         datasheet("kodak-vision3-250d-5207.json")),
+                     13.1 / 7.2);
+    EXPECT_EQ(fit::granularity_spread_across_layers(datasheet("kodak-tri-x-400.json")), 1.0);
+    // No density every layer shares: no spread to read.
+    sm::Datasheet sheet = datasheet("kodak-vision3-500t-5219.json");
+    for (sm::GranularityTarget& g : sheet.layers[0].granularity)
+        g.density += 0.01;
+    EXPECT_EQ(fit::granularity_spread_across_layers(sheet), 1.0);
+}
+
+TEST(Recipe, DyeCloudsStartLargeWhereOneLayerIsMuchGrainier)
+{
+    sm::Datasheet sheet = datasheet("kodak-vision3-250d-5207.json");
+    EXPECT_EQ(fit::recipe_for(sheet).options.start_cloud_ratio, 1.0);
+    // Blue made grainier until it is just past the threshold: clouds start at
+    // twice their grain; just short of it, at their grain.
+    for (const double factor : { 1.01, 0.99 }) {
+        sm::Datasheet grainy = sheet;
+        const double spread  = fit::granularity_spread_across_layers(sheet);
+        for (sm::GranularityTarget& g : grainy.layers[2].granularity)
+            g.rms *= factor * fit::kBigCloudGranularitySpread / spread;
+        EXPECT_EQ(fit::recipe_for(grainy).options.start_cloud_ratio, factor > 1.0 ? 2.0 : 1.0)
+            << "factor " << factor;
+    }
+    const sm::Datasheet v500t = datasheet("kodak-vision3-500t-5219.json");
+    EXPECT_EQ(fit::recipe_for(v500t).options.start_cloud_ratio, 2.0);
+}
+
+/// The recipe for a colour negative asks for the structure the built-in
+/// colour stocks (fitted by docs/stocks' hand-written recipes) have.
+void expect_recipe_is_the_stocks(const std::string& preset, const std::string& sheet_file)
+{
+    Stock stock;
+    ASSERT_TRUE(load_stock(preset, stock));
+    const fit::FitRecipe r = fit::recipe_for(datasheet(sheet_file));
+    EXPECT_FALSE(r.reasons.empty());
+    for (const Layer& l : stock.layers) {
+        SCOPED_TRACE(preset + " layer " + l.name);
+        ASSERT_EQ(l.populations.size(), static_cast<size_t>(r.options.populations));
+        EXPECT_EQ(l.cloud_profile, r.options.cloud_profile);
+        for (size_t p = 0; p < l.populations.size(); ++p) {
+            EXPECT_EQ(l.populations[p].coupler_limited(),
+                      p < static_cast<size_t>(r.options.coupler_limited));
+            EXPECT_LE(l.populations[p].diameter_log_sigma, r.options.max_log_sigma);
+        }
+        const auto it = r.options.light_spread.find(l.name);
+        ASSERT_NE(it, r.options.light_spread.end());
+        EXPECT_EQ(l.scatter, it->second.scatter);
+        EXPECT_EQ(l.scatter_sigma_um, it->second.scatter_sigma_um);
+        EXPECT_EQ(l.halation, it->second.halation);
+        EXPECT_EQ(l.halation_radius_um, it->second.halation_radius_um);
+        EXPECT_EQ(l.halation_kernel, it->second.halation_kernel);
+    }
+    ASSERT_TRUE(r.options.film_base.has_value());
+    EXPECT_EQ(stock.base_thickness_um, r.options.film_base->thickness_um);
+    EXPECT_EQ(stock.base_refractive_index, r.options.film_base->refractive_index);
+    EXPECT_EQ(stock.rear_face, r.options.film_base->rear_face);
+}
+
+TEST(Recipe, AColourNegativeGetsTheBuiltInColourStocksStructure)
+{
+    expect_recipe_is_the_stocks("vision3-500t", "kodak-vision3-500t-5219.json");
+    expect_recipe_is_the_stocks("vision3-250d", "kodak-vision3-250d-5207.json");
+}
+
+TEST(Recipe, ABlackAndWhiteNegativeGetsSilverWithoutSpread)
+{
+    using Pair = std::pair<std::string, std::string>;
+    for (const auto& [preset, file] : { Pair{ "tri-x-400", "kodak-tri-x-400.json" },
+                                        Pair{ "t-max-100", "kodak-t-max-100.json" } }) {
+        const fit::FitRecipe r = fit::recipe_for(datasheet(file));
+        EXPECT_EQ(r.options.coupler_limited, 0);
+        EXPECT_TRUE(r.options.light_spread.empty());
+        EXPECT_FALSE(r.options.film_base.has_value());
+        EXPECT_EQ(r.options.rounds, 3);
+        Stock stock;
+        ASSERT_TRUE(load_stock(preset, stock));
+        for (const Layer& l : stock.layers)
+            EXPECT_EQ(l.populations.size(), static_cast<size_t>(r.options.populations)) << preset;
+    }
+}
+
+TEST(Recipe, AnUnknownKindGetsTheLibrarysDefaultsAndSaysSo)
+{
+    sm::Datasheet sheet = datasheet("kodak-tri-x-400.json");
+    sheet.kind          = "reversal";
+    const fit::FitRecipe r = fit::recipe_for(sheet);
+    const fit::FitOptions library;
+    EXPECT_EQ(r.options.populations, library.populations);
+    EXPECT_EQ(r.options.rounds, library.rounds);
+    ASSERT_EQ(r.reasons.size(), 1u);
+    EXPECT_NE(r.reasons[0].find("'reversal' has no recipe"), std::string::npos);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -21,6 +22,7 @@
 #include "util/parse_number.h"
 #include "util/whole_file.h"
 #include "fit.h"
+#include "recipe.h"
 
 namespace sm = filmgrain::sensitometry;
 using filmgrain::Status;
@@ -31,6 +33,20 @@ namespace {
 void usage(std::ostream& os)
 {
     const filmgrain::fit::FitOptions d;
+    sm::Datasheet bw, colour;
+    bw.kind     = "bw-negative";
+    colour.kind = "colour-negative";
+    const filmgrain::fit::FitRecipe b = filmgrain::fit::recipe_for(bw);
+    const filmgrain::fit::FitRecipe c = filmgrain::fit::recipe_for(colour);
+    // "(default B)" or "(default: B black and white, C colour negative)".
+    const auto by_kind = [](const auto& bv, const auto& cv) {
+        std::ostringstream o;
+        if (bv == cv)
+            o << "(default " << bv << ")";
+        else
+            o << "(default: " << bv << " black and white, " << cv << " colour negative)";
+        return o.str();
+    };
     os << "usage: filmgrain-fit DATASHEET.json -o STOCK.json [options]\n"
           "       filmgrain-fit DATASHEET.json --measure STOCK|PRESET [--report DIR]\n"
           "Fits a film stock's grain populations, latent-image rates and base density to\n"
@@ -38,6 +54,8 @@ void usage(std::ostream& os)
           "granularity, reciprocity, characteristic curve points; format:\n"
           "stocks/datasheets/README.md), measuring\n"
           "every candidate analytically the datasheet way (tools/sensitometry/datasheet.h).\n"
+          "Options left unset are chosen by the datasheet's kind and figures (the recipe\n"
+          "the progress lines state; tools/fit/recipe.h says why each).\n"
           "  -o FILE            write the fitted stock (JSON, every key) to FILE\n"
           "  --report DIR       write report.md (target vs achieved, every figure),\n"
           "                     figures.json, curves.csv and granularity.csv to DIR\n"
@@ -46,53 +64,59 @@ void usage(std::ostream& os)
           "  --seed N           multi-start seed; the fit is deterministic for it (default "
        << d.seed
        << ")\n"
-          "  --populations N    grain populations per layer, 1 to 4 (default "
-       << d.populations
-       << ")\n"
-          "  --starts N         starts of the population search per layer and round (default "
-       << d.starts
-       << ")\n"
-          "  --population-evals N  evaluations per start (default "
-       << d.population_evals
-       << ")\n"
+          "  --populations N    grain populations per layer, 1 to 4 "
+       << by_kind(b.options.populations, c.options.populations)
+       << "\n"
+          "  --starts N         starts of the population search per layer and round\n"
+          "                     "
+       << by_kind(b.options.starts, c.options.starts)
+       << "\n"
+          "  --population-evals N  evaluations per start\n"
+          "                     "
+       << by_kind(b.options.population_evals, c.options.population_evals)
+       << "\n"
           "  --rate-evals N     evaluations of the rate search per round (default "
        << d.rate_evals
        << ")\n"
           "  --rounds N         rounds of (populations, rates), 1 to 8; one round fits no\n"
-          "                     rates (default "
-       << d.rounds
-       << ")\n"
+          "                     rates "
+       << by_kind(b.options.rounds, c.options.rounds)
+       << "\n"
           "  --no-rates         keep the starting rates (MODEL.md 7's, or --start's)\n"
           "  --image silver|dye the layers' image (MODEL.md 8); dye searches each layer's\n"
           "                     cloud_diameter_ratio and cloud_density too (default: dye\n"
           "                     for a colour negative datasheet, silver for black and\n"
           "                     white; with --start, the start stock's own)\n"
-          "  --cloud-profile disc|gaussian  dye clouds' profile (default "
-       << filmgrain::cloud_profile_name(d.cloud_profile)
-       << ")\n"
+          "  --cloud-profile disc|gaussian  dye clouds' profile\n"
+          "                     "
+       << by_kind(std::string(filmgrain::cloud_profile_name(b.options.cloud_profile)),
+                  std::string(filmgrain::cloud_profile_name(c.options.cloud_profile)))
+       << "\n"
           "  --start-cloud-ratio X  dye clouds of the physical guess, in grain\n"
           "                     diameters, 0.5 to 2: its grains are Siedentopf's\n"
-          "                     developed size over X (default "
-       << d.start_cloud_ratio
-       << ")\n"
+          "                     developed size over X (default 2 where one layer is\n"
+          "                     "
+       << filmgrain::fit::kBigCloudGranularitySpread
+       << " times as grainy as another at the same density, else 1)\n"
           "  --coupler-limited N  the first N populations of each dye layer are\n"
           "                     coupler-limited (max_dye_density, searched as 0.05 to 1\n"
           "                     times cloud_density; needs --cloud-profile disc), 0 to 4\n"
           "                     (default "
-       << d.coupler_limited
-       << ")\n"
+       << c.options.coupler_limited
+       << " for dye layers of disc clouds, else 0)\n"
           "  --max-log-sigma X  largest diameter_log_sigma of a population, 0.05 to 0.8\n"
-          "                     (default "
-       << d.max_log_sigma
-       << "; the VISION3 fits use 0.7 and\n"
-          "                     stay at pixel scale in a 4K scan)\n"
+          "                     "
+       << by_kind(b.options.max_log_sigma, c.options.max_log_sigma)
+       << "\n"
           "  --scatter L=F,...  the fitted stock's scatter (MODEL.md 9): fraction F of\n"
           "                     layer L's light, a Gaussian of --scatter-sigma-um\n"
-          "                     (default: none; with --start, the start stock's own)\n"
+          "                     (default: none for black and white, VISION3's for a\n"
+          "                     colour negative, the recipe's line says it; with\n"
+          "                     --start, the start stock's own)\n"
           "  --scatter-sigma-um X  micrometres, 0 to 1000 (needed with --scatter)\n"
           "  --halation L=F,... the fitted stock's halation (MODEL.md 9): fraction F of\n"
           "                     layer L's light reflected back, in the kernel below\n"
-          "                     (default: none; with --start, the start stock's own).\n"
+          "                     (default: as --scatter's).\n"
           "                     A layer named in either list gets exactly these keys.\n"
           "                     Uniform patches see halation as 1 + F times the light\n"
           "                     and scatter not at all: the search runs without them,\n"
@@ -107,6 +131,7 @@ void usage(std::ostream& os)
           "                     has one; only with it)\n"
           "  --base-refractive-index X  the base's index, 1.3 to 2 (default 1.5)\n"
           "  --rear-face remjet|bare  what lies behind the base (default bare)\n"
+          "  --no-light-spread  a colour negative without the default spread and base\n"
           "  --inhibition, --no-inhibition  search each layer's self-inhibition (MODEL.md\n"
           "                     10, diffusion "
        << d.inhibitor_diffusion_um
@@ -243,6 +268,9 @@ struct FitCommand {
     filmgrain::fit::FitOptions opt;
     std::string sheet_path, out_path, report_dir, measure_path, start_path, name;
     bool quiet = false, check = false;
+    /// The options given (what the recipe leaves alone).
+    std::set<std::string> given;
+    bool no_light_spread = false;
 };
 
 /// Parses argv into `cmd`: nothing, or the exit status (0 after --help, 2
@@ -257,6 +285,8 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
     std::optional<filmgrain::RearFace> rear_face;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
+        if (a.size() > 1 && a[0] == '-')
+            cmd.given.insert(a);
         const auto next = [&](const char* what) -> std::string {
             if (i + 1 >= argc) {
                 std::cerr << "filmgrain-fit: " << a << " needs " << what << "\n";
@@ -382,6 +412,8 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
         } else if (a == "--rear-face") {
             rear_face = choice({ "remjet", "bare" }) == "remjet" ? filmgrain::RearFace::remjet
                                                                  : filmgrain::RearFace::bare;
+        } else if (a == "--no-light-spread") {
+            cmd.no_light_spread = true;
         } else if (a == "--inhibition") {
             opt.inhibition = true;
         } else if (a == "--no-inhibition") {
@@ -451,6 +483,10 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
                 ls.halation_kernel    = halation_kernel.value_or(filmgrain::HalationKernel::disc);
             }
         }
+    if (cmd.no_light_spread && (!opt.light_spread.empty() || base_kernel)) {
+        std::cerr << "filmgrain-fit: --no-light-spread with --scatter or --halation\n";
+        return 2;
+    }
     if (!opt.light_spread.empty() && !cmd.measure_path.empty()) {
         std::cerr << "filmgrain-fit: --scatter and --halation set a fitted stock's spread; "
                      "--measure measures a stock as it is\n";
@@ -461,6 +497,67 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
         return 2;
     }
     return std::nullopt;
+}
+
+/// The recipe's choice (filmgrain::fit::recipe_for) for every fit option
+/// the command line left unset; a --start stock keeps its own images,
+/// cloud limits and light spread. Says the recipe in the progress lines.
+void apply_recipe(const sm::Datasheet& sheet, FitCommand& cmd)
+{
+    const filmgrain::fit::FitRecipe r = filmgrain::fit::recipe_for(sheet);
+    filmgrain::fit::FitOptions& opt   = cmd.opt;
+    std::vector<std::string> overridden;
+    const auto unset = [&](const char* option) {
+        if (!cmd.given.count(option))
+            return true;
+        overridden.push_back(option);
+        return false;
+    };
+    if (unset("--populations"))
+        opt.populations = r.options.populations;
+    if (unset("--starts"))
+        opt.starts = r.options.starts;
+    if (unset("--population-evals"))
+        opt.population_evals = r.options.population_evals;
+    if (unset("--rounds"))
+        opt.rounds = r.options.rounds;
+    if (unset("--max-log-sigma"))
+        opt.max_log_sigma = r.options.max_log_sigma;
+    const bool start = !cmd.start_path.empty();
+    if (!start) {
+        if (unset("--cloud-profile"))
+            opt.cloud_profile = r.options.cloud_profile;
+        // Coupler limits need dye layers of disc clouds: not where the
+        // command line asks for silver or gaussian clouds.
+        const bool disc_dye = opt.cloud_profile == filmgrain::CloudProfile::disc
+                              && opt.image.value_or(filmgrain::LayerImage::dye)
+                                     == filmgrain::LayerImage::dye;
+        if (unset("--coupler-limited") && disc_dye)
+            opt.coupler_limited = r.options.coupler_limited;
+        if (unset("--start-cloud-ratio"))
+            opt.start_cloud_ratio = r.options.start_cloud_ratio;
+        const bool spread_given = cmd.no_light_spread || !opt.light_spread.empty()
+                                  || opt.film_base.has_value();
+        if (spread_given && !r.options.light_spread.empty())
+            overridden.push_back("the light spread");
+        if (!spread_given) {
+            opt.light_spread = r.options.light_spread;
+            opt.film_base    = r.options.film_base;
+        }
+    }
+    if (!opt.progress)
+        return;
+    for (const std::string& why : r.reasons)
+        opt.progress("recipe: " + why);
+    if (start)
+        opt.progress("recipe: --start: the start stock's images, cloud limits and light "
+                     "spread are kept");
+    if (!overridden.empty()) {
+        std::string list;
+        for (const std::string& o : overridden)
+            list += (list.empty() ? "" : ", ") + o;
+        opt.progress("recipe: the command line's own " + list);
+    }
 }
 
 /// What a fit or a measurement found (a measurement: no evaluations, 0 s).
@@ -635,6 +732,8 @@ int main(int argc, char** argv)
                                    .count())
                       << line << std::endl;
         };
+    if (cmd.measure_path.empty())
+        apply_recipe(sheet, cmd);
     Outcome o;
     if (Status s = fit_or_measure(cmd, sheet, o); !s) {
         std::cerr << "filmgrain-fit: " << s.message() << "\n";
