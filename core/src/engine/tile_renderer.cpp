@@ -297,14 +297,14 @@ private:
         explicit operator bool() const { return curve != nullptr; }
         bool may_keep(uint32_t u_bits) const
         {
-            return (static_cast<double>(u_bits) + 0.5) * 0x1.0p-32 >= min_u;
+            return uniform_from_bits(u_bits) >= min_u;
         }
         /// Whether a grain of radius r and development bits u_bits can
         /// develop (as develop_fast reads u from them).
         bool operator()(double r_um, uint32_t u_bits) const
         {
-            const double u = (static_cast<double>(u_bits) + 0.5) * 0x1.0p-32;
-            return u >= 1.0 - curve->probability_bound_at_root(root_photons_per_um * r_um);
+            return uniform_from_bits(u_bits)
+                   >= 1.0 - curve->probability_bound_at_root(root_photons_per_um * r_um);
         }
     };
     static GrainFilter grain_filter(const DevelopCurve& curve, double k, const FastGrains& fast,
@@ -415,7 +415,7 @@ private:
                 // Development::develops. Kept for the second loop where the
                 // inhibitors change it.
                 const auto uniform_of = [&](size_t i) {
-                    double u = (static_cast<double>(b.u_bits[i]) + 0.5) * 0x1.0p-32;
+                    double u = uniform_from_bits(b.u_bits[i]);
                     if constexpr (!Plain)
                         if (inhibition)
                             u = inhibited_uniform(u, inhibition->at(b.x[i], b.y[i]));

@@ -95,7 +95,7 @@ Sample monte_carlo(const std::vector<PixelPopulation>& pps, double v, const Laye
                     const Disc d { x, y, dye ? r * image_reach_factor(*dye) : r };
                     if (!disc_touches_rect(d, rect.x0_um, rect.y0_um, rect.x1_um, rect.y1_um))
                         return;
-                    const double u = (bits + 0.5) * 0x1.0p-32;
+                    const double u = uniform_from_bits(bits);
                     if (u >= 1.0 - factor * pixel_develop_probability(
                                        pp, pp.photons_per_value_um2 * v * M_PI * r * r))
                         discs.push_back({ x, y, r });

@@ -48,6 +48,13 @@ inline constexpr uint64_t counter_u64(uint64_t key, uint64_t k)
     return z ^ (z >> 31);
 }
 
+/// The uniform in (0, 1) that 32 random bits stand for: the centre of
+/// their interval of width 2^-32 (never 0 or 1).
+inline constexpr double uniform_from_bits(uint32_t bits)
+{
+    return (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
+}
+
 /// Stages of a grain's life; each draws from its own stream so that a fast
 /// path that skips one stage does not shift the random numbers of another.
 enum class Stage : uint64_t {
