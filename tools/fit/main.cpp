@@ -529,11 +529,18 @@ void apply_recipe(const sm::Datasheet& sheet, FitCommand& cmd)
             opt.cloud_profile = r.options.cloud_profile;
         // Coupler limits need dye layers of disc clouds: not where the
         // command line asks for silver or gaussian clouds.
+        const filmgrain::LayerImage image = opt.image.value_or(
+            sheet.kind == "colour-negative" ? filmgrain::LayerImage::dye
+                                            : filmgrain::LayerImage::silver);
         const bool disc_dye = opt.cloud_profile == filmgrain::CloudProfile::disc
-                              && opt.image.value_or(filmgrain::LayerImage::dye)
-                                     == filmgrain::LayerImage::dye;
-        if (unset("--coupler-limited") && disc_dye)
-            opt.coupler_limited = r.options.coupler_limited;
+                              && image == filmgrain::LayerImage::dye;
+        if (unset("--coupler-limited")) {
+            if (disc_dye)
+                opt.coupler_limited = r.options.coupler_limited;
+            else if (r.options.coupler_limited > 0)
+                overridden.push_back("layers' image (no coupler limits: they need disc dye "
+                                     "clouds)");
+        }
         if (unset("--start-cloud-ratio"))
             opt.start_cloud_ratio = r.options.start_cloud_ratio;
         const bool spread_given = cmd.no_light_spread || !opt.light_spread.empty()
