@@ -282,10 +282,11 @@ private:
     /// pixels the discs of the cell's grains can touch (times 1 +
     /// kDiscAreaMargin), so it develops with probability at most the
     /// curve's bound there (the inhibitors only lower it: log factor >= 0),
-    /// and not at all when its uniform u < 1 - that bound. v_max comes from the tile's plane;
-    /// a cell whose discs may reach beyond it, or of a bin whose cells are
-    /// wider than kFilteredCellPitches pixels, keeps every grain. Which
-    /// grains are dropped never changes an outcome: they cannot develop.
+    /// and not at all when its uniform u < 1 - that bound. v_max comes from
+    /// the tile's plane; a cell whose discs may reach beyond it, or of a bin
+    /// whose cells are wider than kFilteredCellPitches pixels, keeps every
+    /// grain. Which grains are dropped never changes an outcome: they
+    /// cannot develop.
     struct GrainFilter {
         const DevelopCurve* curve = nullptr;  ///< null: every grain kept
         /// sqrt(k v_max pi (1 + kDiscAreaMargin)), sqrt(photons) per um:

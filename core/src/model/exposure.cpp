@@ -140,7 +140,7 @@ void LayerExposure::means_over_grid(const std::vector<double>& xs_um,
     if (xs_um.size() < 2 || ys_um.size() < 2)
         return;
     const size_t nx = xs_um.size() - 1, ny = ys_um.size() - 1;
-    // Each column's overlaps, end to end, and where each column's begin.
+    // The columns' overlaps, end to end, and where each column's start.
     std::vector<Overlap> all, one;
     std::vector<size_t> column_start { 0 };
     for (size_t i = 0; i < nx; ++i) {
