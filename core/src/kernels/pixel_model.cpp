@@ -804,8 +804,7 @@ void sample_pixel_transmittance(const PixelModel& model, uint64_t key, int64_t x
         for (int64_t i = 0; i < zw; ++i) {
             const uint64_t id = hash_ids(key, static_cast<uint64_t>(x0 + i - k),
                                          static_cast<uint64_t>(y0 + j - k));
-            u[static_cast<size_t>(j * zw + i)]
-                = (static_cast<double>(counter_u64(id, 0) >> 11) + 0.5) * 0x1.0p-53;
+            u[static_cast<size_t>(j * zw + i)] = uniform_from_bits53(counter_u64(id, 0));
         }
     normal_quantiles(u.data(), z.data(), z.size());
     static_assert(kMaxLag == 4, "draw_block is instantiated for 1 to 4 lags");

@@ -451,10 +451,8 @@ TEST(PixelModel, CopulaNormalCorrelationGivesTheDrawsTheirCorrelation)
             constexpr int kPairs = 200000;
             double sa = 0.0, sb = 0.0, saa = 0.0, sbb = 0.0, sab = 0.0;
             for (int i = 0; i < kPairs; ++i) {
-                const double u1 = (static_cast<double>(counter_u64(hash_ids(5, i), 0) >> 11) + 0.5)
-                                  * 0x1.0p-53;
-                const double u2 = (static_cast<double>(counter_u64(hash_ids(6, i), 0) >> 11) + 0.5)
-                                  * 0x1.0p-53;
+                const double u1 = uniform_from_bits53(counter_u64(hash_ids(5, i), 0));
+                const double u2 = uniform_from_bits53(counter_u64(hash_ids(6, i), 0));
                 const double z1 = normal_quantile(u1), z2 = normal_quantile(u2);
                 const double a = skewed_draw(mean, variance, z1);
                 const double b = skewed_draw(mean, variance, r * z1 + std::sqrt(1 - r * r) * z2);

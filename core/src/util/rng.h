@@ -55,6 +55,14 @@ inline constexpr double uniform_from_bits(uint32_t bits)
     return (static_cast<double>(bits) + 0.5) * 0x1.0p-32;
 }
 
+/// The uniform in (0, 1) that the top 53 bits of a 64-bit draw stand for:
+/// the centre of their interval of width 2^-53 (never 0 or 1; a double's
+/// full precision, for quantiles far in a tail).
+inline constexpr double uniform_from_bits53(uint64_t bits)
+{
+    return (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53;
+}
+
 /// Stages of a grain's life; each draws from its own stream so that a fast
 /// path that skips one stage does not shift the random numbers of another.
 enum class Stage : uint64_t {
