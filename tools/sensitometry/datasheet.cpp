@@ -545,7 +545,8 @@ Status granularity_against_density(const Stock& stock, const Datasheet& sheet,
     return {};
 }
 
-double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models)
+double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models,
+                         const std::string& layer)
 {
     const bool iso5800    = sheet.speed_standard == "ISO 5800";
     const double crit_net = iso5800 ? kIso5800SpeedNetDensity : kIso6SpeedNetDensity;
@@ -553,7 +554,7 @@ double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopMode
     double shortfall      = 0.0;
     for (const LayerTargets& t : sheet.layers) {
         const int l = find_layer(stock, t.name);
-        if (l < 0)
+        if (l < 0 || (!layer.empty() && t.name != layer))
             continue;
         const ExpectedCurve& c = ref.curves[static_cast<size_t>(l)];
         double largest = c.min_density();
