@@ -475,57 +475,6 @@ TEST(Fitter, SaysWhatTheModelCannotReach)
     EXPECT_TRUE(slope_missed);
 }
 
-// VISION3 50D's grains are fine (RMS 4.4-4.9 at net 1): the stock the
-// search starts from (grains sized by Siedentopf's law, at most 15 per
-// um^2 a population, no base density yet) reaches none of the layers'
-// granularity target densities. A population search that cannot measure
-// a candidate costs its shortfall; counted over every layer, the largest
-// was another layer's in each of the first round's searches, so every
-// evaluation cost the same (red 1.775e6) and the round was lost. Counted
-// for the searched layer alone, the round leaves a stock that reaches its
-// targets: the last layer's search is measured.
-TEST(Fitter, AStartThatReachesNoTargetDensityIsMeasurableAfterOneRound)
-{
-    const sm::Datasheet sheet = datasheet("kodak-vision3-50d-5203.json");
-    fit::FitOptions o;
-    o.rounds           = 1;
-    o.starts           = 1;
-    o.population_evals = 100;
-    std::vector<std::string> said;
-    o.progress = [&said](const std::string& line) { said.push_back(line); };
-    fit::FitResult r;
-    ASSERT_TRUE(fit::fit_stock(sheet, o, r));
-    const auto objective = [&said](const std::string& layer) {
-        const std::string key = "round 1, layer " + layer + ": objective ";
-        for (const std::string& line : said)
-            if (const size_t at = line.find(key); at != std::string::npos)
-                return std::stod(line.substr(at + key.size()));
-        ADD_FAILURE() << "no objective for round 1, layer " << layer;
-        return 0.0;
-    };
-    EXPECT_GE(objective("R"), 1e6) << "the start is unmeasurable (else this test tests nothing)";
-    EXPECT_LT(objective("B"), 1e6);
-}
-
-// The shortfall of one layer is that layer's alone.
-TEST(Datasheet, ShortfallOfOneLayerIsThatLayersAlone)
-{
-    const sm::Datasheet sheet = datasheet("kodak-vision3-50d-5203.json");
-    fit::FitOptions o;
-    Stock start;
-    ASSERT_TRUE(fit::initial_stock(sheet, o, start));
-    DevelopModels models(start, o.search_curve);
-    const double all = sm::density_shortfall(start, sheet, models);
-    ASSERT_GT(all, 0.0);
-    double largest = 0.0;
-    for (const sm::LayerTargets& t : sheet.layers) {
-        const double own = sm::density_shortfall(start, sheet, models, t.name);
-        EXPECT_LE(own, all) << t.name;
-        largest = std::max(largest, own);
-    }
-    EXPECT_EQ(largest, all);
-}
-
 TEST(Fitter, AGranularityDensityTheCurveNeverReachesIsMissedNotAnError)
 {
     // Tri-X against its datasheet with one more granularity target at a

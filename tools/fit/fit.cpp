@@ -31,10 +31,9 @@ namespace {
 /// and growing with the density it lacks, so that a search that starts or
 /// strays there finds its way back.
 constexpr double kUnmeasurable = 1e6;
-double unmeasurable(const Stock& stock, const sm::Datasheet& sheet, DevelopModels& models,
-                    const std::string& layer = "")
+double unmeasurable(const Stock& stock, const sm::Datasheet& sheet, DevelopModels& models)
 {
-    return kUnmeasurable * (1.0 + sm::density_shortfall(stock, sheet, models, layer));
+    return kUnmeasurable * (1.0 + sm::density_shortfall(stock, sheet, models));
 }
 
 /// Bounds of the population search (real emulsion scale; the stock
@@ -305,10 +304,8 @@ public:
         const auto objective = [&](Stock& trial, const std::vector<double>& x) {
             set_layer(trial, x);
             sm::DatasheetFigures f;
-            // The searched layer's own shortfall: another layer's, which
-            // this search cannot change, would flatten it.
             if (!sm::measure_datasheet_figures(trial, m_sheet, models, fo, f))
-                return unmeasurable(trial, m_sheet, models, m_sheet.layers[i].name);
+                return unmeasurable(trial, m_sheet, models);
             return layer_objective(m_sheet, i, f, trial.layer_base_density(l));
         };
         Stock first_trial        = m_stock;

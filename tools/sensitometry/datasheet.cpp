@@ -545,8 +545,7 @@ Status granularity_against_density(const Stock& stock, const Datasheet& sheet,
     return {};
 }
 
-double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models,
-                         const std::string& layer)
+double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models)
 {
     const bool iso5800    = sheet.speed_standard == "ISO 5800";
     const double crit_net = iso5800 ? kIso5800SpeedNetDensity : kIso6SpeedNetDensity;
@@ -554,7 +553,7 @@ double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopMode
     double shortfall      = 0.0;
     for (const LayerTargets& t : sheet.layers) {
         const int l = find_layer(stock, t.name);
-        if (l < 0 || (!layer.empty() && t.name != layer))
+        if (l < 0)
             continue;
         const ExpectedCurve& c = ref.curves[static_cast<size_t>(l)];
         double largest = c.min_density();

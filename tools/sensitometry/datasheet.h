@@ -172,12 +172,10 @@ Status granularity_against_density(const Stock& stock, const Datasheet& sheet,
 /// How far `stock` falls short of the densities `sheet`'s targets need
 /// (each layer's speed point, granularity densities and curve points above
 /// D-min) at 1/100 s: the largest needed density less the layer's largest,
-/// over the datasheet's layers (or only the one named `layer`: what a
-/// search of that layer can change), or 0 when every one is reached. What
-/// a search minimises while measure_datasheet_figures cannot measure a
+/// over the datasheet's layers, or 0 when every one is reached. What a
+/// search minimises while measure_datasheet_figures cannot measure a
 /// candidate.
-double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models,
-                         const std::string& layer = "");
+double density_shortfall(const Stock& stock, const Datasheet& sheet, DevelopModels& models);
 
 /// log10 of the neutral exposure at which `curve` (of a layer with
 /// sensitivity sum `sensitivity_sum`) reaches `density`, or NaN.
