@@ -333,99 +333,101 @@ private:
         return {};
     }
 
-    /// One strip of a sweep (3, 4): `stock` from 10^log10_h_min to
+    /// A sweep (3, 4): for each value of `values`, the paper stock with
+    /// `set(stock, value)` applied, exposed from 10^log10_h_min to
     /// 10^log10_h_max lx s in 0.1 steps within the sweeps' budget, seeded
-    /// by `stream`; its first layer's points are written to `curves` after
-    /// the swept value `parameter`.
-    Status sweep_strip(const Stock& stock, double log10_h_min, double log10_h_max,
-                       uint64_t stream, double parameter, Csv& curves, fs::Curve& out)
+    /// by stream_base + value * stream_scale; its first layer's points are
+    /// written to `curves` after the value, then `point(stock, value,
+    /// curve, metrics)` is called.
+    using SweepPoint = std::function<void(const Stock&, double, const fs::Curve&,
+                                          const fs::CurveMetrics&)>;
+    Status paper_sweep(const std::vector<double>& values,
+                       const std::function<void(Stock&, double)>& set, double log10_h_min,
+                       double log10_h_max, uint64_t stream_base, double stream_scale,
+                       Csv& curves, const SweepPoint& point)
     {
-        fs::StripSpec spec;
-        spec.log10_h_min  = log10_h_min;
-        spec.log10_h_max  = log10_h_max;
-        spec.log10_h_step = 0.1;
-        spec.budget.max_area_um2 = 1.0e6;
-        spec.budget.max_cost_s   = 0.25;
-        spec.seed = fs::patch_seed(m_opt.seed, stream);
-        if (Status s = fs::expose_strip(stock, spec, m_settings, out); !s)
+        Stock base;
+        if (Status s = load("paper", base); !s)
             return s;
-        const fs::LayerCurve& l = out.layers[0];
-        for (size_t i = 0; i < l.log10_h.size(); ++i)
-            curves.row(out.engine, parameter, l.log10_h[i], l.density[i], l.density_se[i]);
+        for (double v : values) {
+            Stock stock = base;
+            set(stock, v);
+            fs::StripSpec spec;
+            spec.log10_h_min         = log10_h_min;
+            spec.log10_h_max         = log10_h_max;
+            spec.log10_h_step        = 0.1;
+            spec.budget.max_area_um2 = 1.0e6;
+            spec.budget.max_cost_s   = 0.25;
+            spec.seed = fs::patch_seed(m_opt.seed,
+                                       stream_base + static_cast<uint64_t>(v * stream_scale));
+            fs::Curve c;
+            if (Status s = fs::expose_strip(stock, spec, m_settings, c); !s)
+                return s;
+            const fs::LayerCurve& l = c.layers[0];
+            for (size_t i = 0; i < l.log10_h.size(); ++i)
+                curves.row(c.engine, v, l.log10_h[i], l.density[i], l.density_se[i]);
+            point(stock, v, c, fs::analyse_curve(l));
+        }
         return {};
     }
 
     // 3. Grain size and speed.
     Status grain_size()
     {
-        Stock base;
-        if (Status s = load("paper", base); !s)
-            return s;
         Csv curves(path("grain_size_curves.csv"),
                    { "engine", "diameter_um", "log10_h_lxs", "density", "density_se" });
         Csv table(path("grain_size.csv"),
                   { "engine", "diameter_um", "fog_density", "speed_log10_h", "iso_speed",
                     "gamma", "d_max" });
-        for (double d : { 4.0, 6.0, 9.0 }) {
-            Stock stock = base;
-            stock.layers[0].populations[0].diameter_um = d;
-            fs::Curve c;
-            if (Status s = sweep_strip(stock, -4.5, -0.5, 2000 + static_cast<uint64_t>(d * 10),
-                                       d, curves, c);
-                !s)
-                return s;
-            const fs::LayerCurve& l = c.layers[0];
-            const fs::CurveMetrics m = fs::analyse_curve(l);
-            table.row(c.engine, d, m.base_fog_density, m.speed_log10_h, m.iso_speed, m.gamma,
-                      m.d_max);
-            json j = metrics_json(m);
-            j["diameter_um"] = d;
-            m_results["grain_size"].push_back(j);
-        }
-        return {};
+        return paper_sweep(
+            { 4.0, 6.0, 9.0 },
+            [](Stock& stock, double d) { stock.layers[0].populations[0].diameter_um = d; }, -4.5,
+            -0.5, 2000, 10.0, curves,
+            [&](const Stock&, double d, const fs::Curve& c, const fs::CurveMetrics& m) {
+                table.row(c.engine, d, m.base_fog_density, m.speed_log10_h, m.iso_speed, m.gamma,
+                          m.d_max);
+                json j = metrics_json(m);
+                j["diameter_um"] = d;
+                m_results["grain_size"].push_back(j);
+            });
     }
 
     // 4. Development time.
     Status development()
     {
-        Stock base;
-        if (Status s = load("paper", base); !s)
-            return s;
         Csv curves(path("development_curves.csv"),
                    { "engine", "development_time_s", "log10_h_lxs", "density", "density_se" });
         Csv table(path("development.csv"),
                   { "engine", "development_time_s", "gamma", "gamma_se", "fog_density",
                     "fog_density_se", "model_fog_density", "speed_log10_h", "d_max" });
         std::vector<double> times, gammas, ses;
-        for (double t : { 60.0, 120.0, 240.0, 480.0, 960.0 }) {
-            Stock stock = base;
-            stock.development_time_s = t;
-            fs::Curve c;
-            if (Status s = sweep_strip(stock, -3.8, -0.8, 3000 + static_cast<uint64_t>(t), t,
-                                       curves, c);
-                !s)
-                return s;
-            const fs::LayerCurve& l = c.layers[0];
-            const fs::CurveMetrics m = fs::analyse_curve(l);
-            // MODEL.md 4: unexposed grains develop with f = 1 - exp(-t / fog_tau),
-            // so the fog density is 0.434 n E[a] f (Boolean model: -log10 of
-            // exp(-n E[a] f)) plus the base.
-            const auto& pop = stock.layers[0].populations[0];
-            const double model_fog
-                = filmgrain::kLog10E * pop.grains_per_um2 * filmgrain::mean_disc_area_um2(pop)
-                      * filmgrain::Development(stock).fog_probability()
-                  + stock.layer_base_density(0);
-            table.row(c.engine, t, m.gamma, m.gamma_se, l.fog_density, l.fog_density_se,
-                      model_fog, m.speed_log10_h, m.d_max);
-            json j = metrics_json(m);
-            j["development_time_s"] = t;
-            j["model_fog_density"]  = model_fog;
-            j["fog_density_se"]     = l.fog_density_se;
-            m_results["development"]["times"].push_back(j);
-            times.push_back(t);
-            gammas.push_back(m.gamma);
-            ses.push_back(std::max(m.gamma_se, 1e-3));
-        }
+        const Status swept = paper_sweep(
+            { 60.0, 120.0, 240.0, 480.0, 960.0 },
+            [](Stock& stock, double t) { stock.development_time_s = t; }, -3.8, -0.8, 3000, 1.0,
+            curves,
+            [&](const Stock& stock, double t, const fs::Curve& c, const fs::CurveMetrics& m) {
+                const fs::LayerCurve& l = c.layers[0];
+                // MODEL.md 4: unexposed grains develop with f = 1 - exp(-t /
+                // fog_tau), so the fog density is 0.434 n E[a] f (Boolean
+                // model: -log10 of exp(-n E[a] f)) plus the base.
+                const auto& pop = stock.layers[0].populations[0];
+                const double model_fog
+                    = filmgrain::kLog10E * pop.grains_per_um2 * filmgrain::mean_disc_area_um2(pop)
+                          * filmgrain::Development(stock).fog_probability()
+                      + stock.layer_base_density(0);
+                table.row(c.engine, t, m.gamma, m.gamma_se, l.fog_density, l.fog_density_se,
+                          model_fog, m.speed_log10_h, m.d_max);
+                json j = metrics_json(m);
+                j["development_time_s"] = t;
+                j["model_fog_density"]  = model_fog;
+                j["fog_density_se"]     = l.fog_density_se;
+                m_results["development"]["times"].push_back(j);
+                times.push_back(t);
+                gammas.push_back(m.gamma);
+                ses.push_back(std::max(m.gamma_se, 1e-3));
+            });
+        if (!swept)
+            return swept;
         const fs::GammaTimeFit fit = fs::fit_gamma_vs_time(times, gammas, ses);
         m_results["development"]["fit"] = { { "gamma_inf", fit.gamma_inf },
                                              { "k_per_s", fit.k_per_s },
@@ -537,25 +539,27 @@ private:
 
         // sigma_D vs density through the 48 um aperture.
         Csv vs_d(path("granularity_vs_density.csv"), header);
+        struct Series {
+            const Stock& stock;
+            const char* label;
+            double side_um, pitch_um;
+            std::vector<double> nets;
+        };
+        const Series series[] = {
+            { paper, "paper", 1600.0, 4.0, { 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 1.1, 1.2 } },
+            { dense, "dense", 1200.0, 3.0, { 0.1, 0.3, 0.6, 1.0, 1.5, 2.0, 2.5, 3.0 } },
+        };
         uint64_t k = 0;
-        for (double net : { 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 1.1, 1.2 }) {
-            GranularityCase c;
-            if (Status s = granularity_patch(paper, 0, net, 1600.0, 4.0,
-                                             fs::patch_seed(m_opt.seed, 4000 + k++), c);
-                !s)
-                return s;
-            m_results["granularity"]["vs_density"].push_back(
-                granularity_row(paper, c, 0, 48.0, &vs_d, "paper"));
-        }
-        for (double net : { 0.1, 0.3, 0.6, 1.0, 1.5, 2.0, 2.5, 3.0 }) {
-            GranularityCase c;
-            if (Status s = granularity_patch(dense, 0, net, 1200.0, 3.0,
-                                             fs::patch_seed(m_opt.seed, 4000 + k++), c);
-                !s)
-                return s;
-            m_results["granularity"]["vs_density"].push_back(
-                granularity_row(dense, c, 0, 48.0, &vs_d, "dense"));
-        }
+        for (const Series& sr : series)
+            for (double net : sr.nets) {
+                GranularityCase c;
+                if (Status s = granularity_patch(sr.stock, 0, net, sr.side_um, sr.pitch_um,
+                                                 fs::patch_seed(m_opt.seed, 4000 + k++), c);
+                    !s)
+                    return s;
+                m_results["granularity"]["vs_density"].push_back(
+                    granularity_row(sr.stock, c, 0, 48.0, &vs_d, sr.label));
+            }
         // Selwyn: one large patch of the paper stock at gross density 1.0
         // (base 0: gross = net), read through apertures of 4 to 32 mean
         // grain diameters. Its 48 um reading is the datasheet number.
