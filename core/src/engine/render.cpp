@@ -84,9 +84,10 @@ Status validate_request(const Stock& stock, const SceneSettings& scene, const Im
 }
 
 /// plan_layers, stoppable. Without a progress callback it runs here. With
-/// one it runs as the one item of a polled parallel_for: a worker plans
-/// while this thread (the caller's, as ProgressCallback promises) reports 0
-/// about every 100 ms and cancels the plan when told to: its tables,
+/// one it reports 0 first, then runs as the one item of a polled
+/// parallel_for: a worker plans while this thread (the caller's, as
+/// ProgressCallback promises) reports 0 about every 100 ms and cancels the
+/// plan when told to: its tables,
 /// inhibitor blur and light spread take seconds on a 4K frame of a
 /// fine-grained stock.
 Status plan_stoppably(const Stock& stock, const SceneSettings& scene, const ImageView& input,
@@ -95,6 +96,11 @@ Status plan_stoppably(const Stock& stock, const SceneSettings& scene, const Imag
 {
     if (!settings.progress)
         return plan_layers(stock, scene, input, frame, roi, settings, plan);
+    // Reported once before any work, so that a cancel at the first report
+    // is honoured however fast the plan and the render would be (a small
+    // frame with its tables on disk can finish before the first 100 ms).
+    if (!settings.progress(0.0))
+        return Status::error("render cancelled");
     std::atomic<bool> cancel { false }, stop { false };
     Status status;
     parallel_for(
