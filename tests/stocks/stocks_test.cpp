@@ -87,25 +87,31 @@ TEST(BuiltInStocks, TMax100MeetsItsDatasheet)
 
 // The colour stocks (dye clouds, two coupler-limited populations a layer,
 // self-inhibition: docs/model.md) meet speed, every slope and each half of
-// its range, D-min, granularity and reciprocity figure, and not the named
-// points of the datasheet's characteristic curve (0.1 density, our
-// tolerance: points in the toe, and 250D's green at log H -1.78, by
-// 0.10-0.12); docs/stocks/built-in.md
-// and docs/stocks/README.md say so.
-TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheetButTheNamedFigures)
+// its range, D-min, granularity and reciprocity figure; 500T every point of
+// the datasheet's characteristic curve too, 250D all but the named two in
+// its toe (0.1 density, our tolerance; by 0.103 and 0.110), 200T all but
+// one at its green shoulder (by 0.111);
+// docs/stocks/built-in.md and docs/stocks/README.md say so.
+TEST(BuiltInStocks, Vision3_500tMeetsItsDatasheet)
 {
     // speed, per layer D-min, slope and its halves, RMS at net 0.5 / 1 /
     // 1.5 and 19 curve points, reciprocity at 1e-3, 0.1 and 1 s.
-    check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 82,
-                  { "G D at log H -2.75", "G D at log H -2.5" });
+    check_builtin("vision3-500t", "kodak-vision3-500t-5219.json", 82);
 }
 
 TEST(BuiltInStocks, Vision3_250dMeetsItsDatasheetButTheNamedFigures)
 {
     // As 500T with 20 curve points a layer.
     check_builtin("vision3-250d", "kodak-vision3-250d-5207.json", 85,
-                  { "R D at log H -2.5", "G D at log H -2.5", "G D at log H -1.78",
-                    "B D at log H -2.5" });
+                  { "R D at log H -2.5", "G D at log H -2.5" });
+}
+
+TEST(BuiltInStocks, Vision3_200tMeetsItsDatasheetButTheNamedFigure)
+{
+    // As 500T with 21 curve points a layer; its green's top point (the
+    // shoulder at log H 1.116) by 0.111.
+    check_builtin("vision3-200t", "kodak-vision3-200t-5213.json", 88,
+                  { "G D at log H 1.116" });
 }
 
 // Every built-in stock's characteristic curves rise with exposure: grains
@@ -236,8 +242,10 @@ TEST(Datasheet, CurvePointsAreReadOffTheStocksCurve)
 // layer with halation h measures as the same layer with its sensitivity
 // times 1 + h (every figure: curves, speed, granularity, inhibition), and
 // its speed point lies log10(1 + h) lower than without it (to the chain
-// tables' bound: 0.176 here, about 6 times that bound). The halo is the
-// stock's own kernel, the film base's (docs/model.md), as a disc's would
+// tables' bound: 0.301 here, more than 5 times that bound; h = 0.5 gave
+// 0.176, below 5 bounds (0.231) of 2026-12-07's red layer, whose toe is
+// long where the speed point lies, so h is the largest allowed). The halo
+// is the stock's own kernel, the film base's (docs/model.md), as a disc's would
 // be: every kernel is normalised.
 TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
 {
@@ -248,11 +256,11 @@ TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
         l.scatter = l.scatter_sigma_um = l.halation = l.halation_radius_um = 0.0;
     Stock halo = plain, brighter = plain;
     ASSERT_EQ(halo.layers[0].halation_kernel, HalationKernel::base);
-    halo.layers[0].halation           = 0.5;
+    halo.layers[0].halation           = 1.0;
     halo.layers[0].scatter            = 0.25;
     halo.layers[0].scatter_sigma_um   = 5.0;
     for (double& w : brighter.layers[0].sensitivity)
-        w *= 1.5;
+        w *= 2.0;
     ASSERT_EQ(plain.layers[0].name, "R");
     struct Measured {
         sm::DatasheetFigures figures;
@@ -274,8 +282,8 @@ TEST(Datasheet, HalationAddsItsFractionOnAUniformPatch)
     }
     const sm::Figure& ra = a.figures.layers[0].speed_log10_h;
     const sm::Figure& rb = b.figures.layers[0].speed_log10_h;
-    EXPECT_NEAR(ra.value - rb.value, std::log10(1.5), ra.error + rb.error);
-    EXPECT_GT(std::log10(1.5), 5.0 * (ra.error + rb.error)) << "the test can tell";
+    EXPECT_NEAR(ra.value - rb.value, std::log10(2.0), ra.error + rb.error);
+    EXPECT_GT(std::log10(2.0), 5.0 * (ra.error + rb.error)) << "the test can tell";
 }
 
 TEST(Fitter, RecoversAPerturbedSyntheticTarget)

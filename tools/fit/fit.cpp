@@ -105,42 +105,40 @@ double target_speed_log10_h(const sm::Datasheet& sheet)
                                               : std::log10(0.8 / s);
 }
 
-/// What a speed or slope miss beyond 0.9 of its tolerance adds, per
-/// squared tolerance unit: the curve's figures are within the grains'
-/// reach and are held to their tolerance first, so that a granularity the
-/// model cannot follow (model_limits) is not traded for them.
-constexpr double kCurveMissWeight = 10.0;
-
-/// The weight of a datasheet's characteristic curve in a layer's
-/// objective: its points' mean squared miss counts as this many figures
-/// (the curve is the look; the issue's figures are the rest).
-constexpr double kCurveFigures = 4.0;
+/// What a miss of one of issue 10's figures (speed, slope, granularity)
+/// beyond 0.9 of its tolerance adds, per squared tolerance unit: they are
+/// held to their tolerance first, so that the characteristic curve's
+/// points (our tolerance, 20 or so a layer, each a figure) are not bought
+/// with them. (Until 2026-12-07 granularity was not held, so that one the
+/// model cannot reach, model_limits, would not be traded for speed and
+/// slope; held, such a granularity now weighs as they do.)
+constexpr double kHeldMissWeight = 10.0;
 
 /// Squared misses of one layer's figures in tolerance units (D-min aside:
-/// the base absorbs it; only fog above the target D-min counts), speed and
-/// slope near and beyond their tolerance weighted up (kCurveMissWeight).
+/// the base absorbs it; only fog above the target D-min counts), issue
+/// 10's near and beyond their tolerance weighted up (kHeldMissWeight).
 double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::DatasheetFigures& f,
                        double base_density)
 {
     const sm::LayerTargets& t         = sheet.layers[i];
     const sm::DatasheetFigures::Layer& l = f.layers[i];
     const sm::Tolerances tol;
-    const auto curve_miss = [](double r) {
+    const auto held_miss = [](double r) {
         const double over = std::max(0.0, std::fabs(r) - 0.9);
-        return r * r + kCurveMissWeight * over * over;
+        return r * r + kHeldMissWeight * over * over;
     };
     double j = 0.0;
     if (sheet.speed)
-        j += curve_miss(kStopsPerDecade * (l.speed_log10_h.value - target_speed_log10_h(sheet))
-                        / tol.speed_stops);
+        j += held_miss(kStopsPerDecade * (l.speed_log10_h.value - target_speed_log10_h(sheet))
+                       / tol.speed_stops);
     if (t.slope) {
-        j += curve_miss((l.slope.value - *t.slope) / tol.slope);
+        j += held_miss((l.slope.value - *t.slope) / tol.slope);
         for (const sm::Figure& half : l.slope_halves)
-            j += curve_miss((half.value - *t.slope) / tol.slope_half);
+            j += held_miss((half.value - *t.slope) / tol.slope_half);
     }
     for (size_t g = 0; g < t.granularity.size(); ++g) {
-        const double r = (l.granularity[g].value / t.granularity[g].rms - 1.0) / tol.granularity_rel;
-        j += r * r;
+        j += held_miss((l.granularity[g].value / t.granularity[g].rms - 1.0)
+                       / tol.granularity_rel);
     }
     if (t.d_min) {
         const double fog = l.d_min.value - base_density;
@@ -148,16 +146,16 @@ double layer_objective(const sm::Datasheet& sheet, size_t i, const sm::Datasheet
         j += r * r;
     }
     // The curve's points above D-min (the base is fitted afterwards, so
-    // net density is what the populations set).
+    // net density is what the populations set), each a figure like the
+    // others: the curve is the look, and its toe is what a grey ramp
+    // through ADX reads (issue 40).
     if (!t.curve.empty()) {
         const double d_min = t.curve_d_min();
-        double sum = 0.0;
         for (size_t k = 0; k < t.curve.size(); ++k) {
             const double r = ((l.curve[k].value - l.d_min.value) - (t.curve[k].second - d_min))
                              / tol.curve_density;
-            sum += r * r;
+            j += r * r;
         }
-        j += kCurveFigures * sum / static_cast<double>(t.curve.size());
     }
     return j;
 }

@@ -19,10 +19,10 @@
 // Each objective is the sum of squared misses in units of the issue's
 // tolerance (speed 1/3 stop, slope 0.05, granularity 10%, reciprocity 1/3
 // stop, 1/6 inside none_between), so 1 is "at tolerance" for one figure;
-// speed and slope misses beyond 0.9 of their tolerance cost 10 times more
-// (held first: a granularity the model cannot follow is not traded for them).
-// A datasheet's characteristic curve (its points above D-min) adds its mean
-// squared miss in units of 0.1 density, weighted as four figures.
+// speed, slope and granularity misses beyond 0.9 of their tolerance cost
+// 10 times more (held first). A datasheet's characteristic curve adds each
+// point's squared miss above D-min in units of 0.1 density, each point a
+// figure.
 // The result is measured again at the expected curve's full precision.
 #pragma once
 
