@@ -253,6 +253,18 @@ def main():
                 label=f"no-remjet, layer {'RGB'[layer]}")
         ax.plot(x, uninhibited[rows, cols, layer].mean(axis=0), color=colour, ls=":",
                 label=f"same, inhibition off" if layer == 1 else None)
+    # The numbers docs/look quotes: what the inhibitors take from the area
+    # (its last 32 columns, 200-400 um in), and how far the first 25 um
+    # inside the edge stand above the 25-100 um behind them.
+    inside = x > 0.0
+    for layer in range(3):
+        on = look[rows, cols, layer].mean(axis=0)
+        off = uninhibited[rows, cols, layer].mean(axis=0)
+        first = inside & (x < 25.0)
+        behind = (x >= 25.0) & (x < 100.0)
+        print(f"edge profile, layer {'RGB'[layer]}: inhibition lowers the area by "
+              f"{off[-32:].mean() - on[-32:].mean():.4f}; first 25 um stand "
+              f"{on[first].mean() - on[behind].mean():+.4f} above the 25-100 um behind")
     ax.axvline(0.0, color="grey", lw=0.8)
     ax.set_xlabel("distance from the edge of the grey rectangle (um on the film)")
     ax.set_ylabel("mean density (rows of the rectangle)")
