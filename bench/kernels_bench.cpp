@@ -442,8 +442,9 @@ BENCHMARK(BM_PixelModelDraw);
 
 void BM_SpreadFrame(benchmark::State& state)
 {
+    const double frame_width_um = 1000.0 * SceneSettings().width_mm;  // Super 35
     const int64_t w = state.range(0), h = w * 3112 / 4096;
-    const double pitch_um = 24890.0 / static_cast<double>(w);
+    const double pitch_um = frame_width_um / static_cast<double>(w);
     HalationSpec halo;
     halo.fraction              = 0.02;
     halo.kernel                = HalationKernel::base;

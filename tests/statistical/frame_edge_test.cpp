@@ -137,6 +137,7 @@ TEST(FrameEdge, Vision3HasNoRimFromLightSpreadOrInhibition)
     // too, so that the inhibitors' edge is tested where it shows.
     Stock stock;
     ASSERT_TRUE(load_stock("vision3-500t", stock));
+    ASSERT_EQ(stock.inhibition.size(), 3u) << "vision3-500t inhibits (MODEL.md 10)";
     Stock inhibited = stock;
     const double earlier[] = { 0.013, 0.105, 0.156 };
     for (size_t l = 0; l < 3; ++l)
