@@ -1,6 +1,8 @@
 // Exact coverage of a block of pixels (coverage_grid.h).
 #include "kernels/coverage_grid.h"
 
+#include "util/bucket.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -116,20 +118,17 @@ void grid_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, int64
     const auto grow = [&](double y) {
         return std::clamp<int64_t>(static_cast<int64_t>(std::floor((y - gy0) / cell)), 0, gh - 1);
     };
-    offsets.assign(static_cast<size_t>(gw * gh + 1), 0);
-    for (size_t i = 0; i < discs.size(); ++i) {
+    // Small discs are bucketed by the cell of their centre; big ones are
+    // tested by every disc.
+    for (size_t i = 0; i < discs.size(); ++i)
         if (discs[i].r_um > r_small)
             big.push_back(i);
-        else
-            ++offsets[static_cast<size_t>(grow(discs[i].y_um) * gw + gcol(discs[i].x_um)) + 1];
-    }
-    for (size_t c = 1; c < offsets.size(); ++c)
-        offsets[c] += offsets[c - 1];
-    members.resize(offsets.back());
-    fill.assign(offsets.begin(), offsets.end() - 1);
-    for (size_t i = 0; i < discs.size(); ++i)
-        if (discs[i].r_um <= r_small)
-            members[fill[static_cast<size_t>(grow(discs[i].y_um) * gw + gcol(discs[i].x_um))]++] = i;
+    const auto cell_of = [&](size_t i, int64_t& c0, int64_t& c1) {
+        c0 = grow(discs[i].y_um) * gw + gcol(discs[i].x_um);
+        c1 = discs[i].r_um > r_small ? c0 - 1 : c0;
+    };
+    bucket_by_row(discs.size(), gw * gh, cell_of, [](size_t i, int64_t) { return i; }, offsets,
+                  fill, members);
 
     // 2. Visible arcs of each disc, cut where the circle crosses the pixel
     //    grid; each piece lies in one pixel and adds its Green term there

@@ -1,6 +1,8 @@
 // Coverage on sub-scanlines (coverage_scanline.h).
 #include "kernels/coverage_scanline.h"
 
+#include "util/bucket.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -21,33 +23,23 @@ void scanline_coverage(const std::vector<Disc>& discs, int64_t x0, int64_t y0, i
     std::fill(fraction, fraction + tw * th, 0.0);
     auto& offsets = scratch.offsets;
     auto& chords  = scratch.chords;
-    auto& fill    = scratch.fill;
-    // Sub-scanlines a disc crosses: (g + 0.5) h in (y - r, y + r).
-    const auto crossing = [&](const Disc& d, int64_t& ga, int64_t& gb) {
-        ga = std::max<int64_t>(g0, static_cast<int64_t>(std::ceil((d.y_um - d.r_um) / h - 0.5)));
-        gb = std::min<int64_t>(g0 + rows - 1,
-                               static_cast<int64_t>(std::floor((d.y_um + d.r_um) / h - 0.5)));
+    // Sub-scanlines a disc crosses: (g + 0.5) h in (y - r, y + r); the
+    // rows of the buckets are g - g0.
+    const auto crossing = [&](size_t i, int64_t& ra, int64_t& rb) {
+        const Disc& d = discs[i];
+        ra = std::max<int64_t>(g0, static_cast<int64_t>(std::ceil((d.y_um - d.r_um) / h - 0.5)))
+             - g0;
+        rb = std::min<int64_t>(g0 + rows - 1,
+                               static_cast<int64_t>(std::floor((d.y_um + d.r_um) / h - 0.5)))
+             - g0;
     };
-    offsets.assign(static_cast<size_t>(rows + 1), 0);
-    for (const Disc& d : discs) {
-        int64_t ga, gb;
-        crossing(d, ga, gb);
-        for (int64_t g = ga; g <= gb; ++g)
-            ++offsets[static_cast<size_t>(g - g0 + 1)];
-    }
-    for (size_t i = 1; i < offsets.size(); ++i)
-        offsets[i] += offsets[i - 1];
-    chords.resize(offsets.back());
-    fill.assign(offsets.begin(), offsets.end() - 1);
-    for (const Disc& d : discs) {
-        int64_t ga, gb;
-        crossing(d, ga, gb);
-        for (int64_t g = ga; g <= gb; ++g) {
-            const double dy   = (static_cast<double>(g) + 0.5) * h - d.y_um;
-            const double half = std::sqrt(std::max(0.0, d.r_um * d.r_um - dy * dy));
-            chords[fill[static_cast<size_t>(g - g0)]++] = { d.x_um - half, d.x_um + half };
-        }
-    }
+    const auto chord = [&](size_t i, int64_t r) {
+        const Disc& d     = discs[i];
+        const double dy   = (static_cast<double>(r + g0) + 0.5) * h - d.y_um;
+        const double half = std::sqrt(std::max(0.0, d.r_um * d.r_um - dy * dy));
+        return std::pair<double, double>(d.x_um - half, d.x_um + half);
+    };
+    bucket_by_row(discs.size(), rows, crossing, chord, offsets, scratch.fill, chords);
     // Each sub-scanline: sort its chords, merge, and deposit the covered
     // lengths into the pixels they cross, in increasing x.
     const double left = static_cast<double>(x0) * px_um, right = static_cast<double>(x1) * px_um;

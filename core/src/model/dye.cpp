@@ -7,6 +7,8 @@
 #include <map>
 #include <mutex>
 
+#include "util/bucket.h"
+
 namespace filmgrain {
 
 namespace {
@@ -439,32 +441,19 @@ void dye_transmittance(const std::vector<Disc>& grains, const std::vector<size_t
     const double reach  = image_reach_factor(layer);
     const double peak   = layer.cloud_density;
 
-    // Bucket the clouds by the pixel rows they reach (counting sort).
+    // Bucket the clouds by the pixel rows they reach (counting sort; the
+    // buckets' rows are r - y0).
     std::vector<size_t>& offsets = scratch.offsets;
-    std::vector<size_t>& fill    = scratch.fill;
     std::vector<size_t>& members = scratch.members;
-    offsets.assign(static_cast<size_t>(th + 1), 0);
-    const auto rows = [&](const Disc& g, int64_t& r0, int64_t& r1) {
+    const auto rows = [&](size_t i, int64_t& r0, int64_t& r1) {
+        const Disc& g       = grains[i];
         const double extent = reach * g.r_um;
-        r0 = std::max<int64_t>(y0, static_cast<int64_t>(std::floor((g.y_um - extent) / py_um)));
-        r1 = std::min<int64_t>(y1 - 1, static_cast<int64_t>(std::floor((g.y_um + extent) / py_um)));
+        r0 = std::max<int64_t>(y0, static_cast<int64_t>(std::floor((g.y_um - extent) / py_um))) - y0;
+        r1 = std::min<int64_t>(y1 - 1, static_cast<int64_t>(std::floor((g.y_um + extent) / py_um)))
+             - y0;
     };
-    for (const Disc& g : grains) {
-        int64_t r0, r1;
-        rows(g, r0, r1);
-        for (int64_t r = r0; r <= r1; ++r)
-            ++offsets[static_cast<size_t>(r - y0 + 1)];
-    }
-    for (size_t i = 1; i < offsets.size(); ++i)
-        offsets[i] += offsets[i - 1];
-    members.resize(offsets.back());
-    fill.assign(offsets.begin(), offsets.end() - 1);
-    for (size_t i = 0; i < grains.size(); ++i) {
-        int64_t r0, r1;
-        rows(grains[i], r0, r1);
-        for (int64_t r = r0; r <= r1; ++r)
-            members[fill[static_cast<size_t>(r - y0)]++] = i;
-    }
+    bucket_by_row(grains.size(), th, rows, [](size_t i, int64_t) { return i; }, offsets,
+                  scratch.fill, members);
 
     if (!gaussian) {
         if (!has_coupler_limit(layer)) {
