@@ -117,51 +117,72 @@ std::string chart_help()
     return out.str();
 }
 
+/// The handler of an option that names something (set_once): `field`
+/// gives the string it sets.
+Handler name_once(const char* flag, const char* what, std::string& (*field)(CliArgs&))
+{
+    return [flag, what, field](CliArgs& a, const std::string&, const char* v) {
+        std::string& out = field(a);
+        return set_once(!out.empty(), flag, v, what, out);
+    };
+}
+
+/// The handler of a switch given at most once.
+Handler switch_once(const char* flag, bool CliArgs::*member)
+{
+    return [flag, member](CliArgs& a, const std::string&, const char*) {
+        Status s  = once(a.*member, flag);
+        a.*member = true;
+        return s;
+    };
+}
+
+/// The handler of --iscolorspace and --ocolorspace: a colour space name
+/// given at most once, and that it was given.
+Handler colour_space_once(const char* flag, std::string CliArgs::*name, bool CliArgs::*given)
+{
+    return [flag, name, given](CliArgs& a, const std::string&, const char* v) {
+        const Status s = set_once(a.*given, flag, v, "colour space name", a.*name);
+        a.*given       = true;
+        return s;
+    };
+}
+
+/// The handler of a switch: sets it (given twice, it stays set).
+Handler switch_on(bool CliArgs::*member)
+{
+    return [member](CliArgs& a, const std::string&, const char*) {
+        a.*member = true;
+        return Status();
+    };
+}
+
 const std::vector<OptionSpec>& option_table()
 {
     static const std::vector<OptionSpec> table = {
         { "--wedge", nullptr, "", wedge_help(),
-          [](CliArgs& a, const std::string&, const char*) {
-              Status s = once(a.wedge, "--wedge");
-              a.wedge  = true;
-              return s;
-          } },
+          switch_once("--wedge", &CliArgs::wedge) },
         { "--chart", nullptr, "", chart_help(),
-          [](CliArgs& a, const std::string&, const char*) {
-              Status s = once(a.chart, "--chart");
-              a.chart  = true;
-              return s;
-          } },
+          switch_once("--chart", &CliArgs::chart) },
         { "--colorconfig", nullptr, "FILE",
           "OCIO config for the input conversion, the regrain output and the preview (default: "
           "$OCIO, else the embedded config)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.colorconfig.empty(), "--colorconfig", v,
-                              "file name", a.colorconfig);
-          } },
+          name_once("--colorconfig", "file name",
+                    [](CliArgs& a) -> std::string& { return a.colorconfig; }) },
         { "--iscolorspace", nullptr, "NAME",
           "Colour space of INPUT (default: the file's oiio:ColorSpace when the config knows "
           "it, else an EXR's chromaticities (its primaries and white), else scene_linear)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              const Status s = set_once(a.has_iscolorspace, "--iscolorspace", v,
-                                        "colour space name", a.iscolorspace);
-              a.has_iscolorspace = true;
-              return s;
-          } },
+          colour_space_once("--iscolorspace", &CliArgs::iscolorspace, &CliArgs::has_iscolorspace) },
         { "--subimage", nullptr, "N|NAME",
           "Part of a multi-part INPUT to read, by index (from 0) or name (as oiiotool's "
           "--subimage; default: the first part with the channels)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.input_selection.subimage.empty(), "--subimage", v,
-                              "part name", a.input_selection.subimage);
-          } },
+          name_once("--subimage", "part name",
+                    [](CliArgs& a) -> std::string& { return a.input_selection.subimage; }) },
         { "--view", nullptr, "NAME",
           "View of a multi-view INPUT to read (default: the file's default view, the first it "
           "lists)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.input_selection.view.empty(), "--view", v,
-                              "view name", a.input_selection.view);
-          } },
+          name_once("--view", "view name",
+                    [](CliArgs& a) -> std::string& { return a.input_selection.view; }) },
         { "--ch", nullptr, "R,G,B|Y",
           "Channels of INPUT to read as red, green and blue, or one as grey, by name (as "
           "oiiotool's --ch; default: R, G, B, else Y, of the view)",
@@ -173,12 +194,7 @@ const std::vector<OptionSpec>& option_table()
         { "--ocolorspace", nullptr, "NAME",
           "Colour space of the output=regrain positive (default: the config's scene_linear); "
           "only with output=regrain",
-          [](CliArgs& a, const std::string&, const char* v) {
-              const Status s = set_once(a.has_ocolorspace, "--ocolorspace", v,
-                                        "colour space name", a.ocolorspace);
-              a.has_ocolorspace = true;
-              return s;
-          } },
+          colour_space_once("--ocolorspace", &CliArgs::ocolorspace, &CliArgs::has_ocolorspace) },
         { "--filmgrain", nullptr, "",
           "Simulate the film: expose, develop and scan a negative (modifiers below)",
           [](CliArgs& a, const std::string& flag, const char*) {
@@ -218,98 +234,62 @@ const std::vector<OptionSpec>& option_table()
           "INPUT, -o, --stats and --preview are then frame patterns (name.####.exr, "
           "name.#.exr, name.@@@.exr, name.%04d.exr); frame N's grain is frame=N's (see "
           "Sequences below). Default: none (one image)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.frames.empty(), "--frames", v, "frame list", a.frames);
-          } },
+          name_once("--frames", "frame list",
+                    [](CliArgs& a) -> std::string& { return a.frames; }) },
         { "--skip-existing", nullptr, "",
           "Sequences: skip a frame whose outputs exist and were made with the same settings "
           "(filmgrain:settings_hash); re-render the others (resuming a stopped sequence). "
           "Default: off (every frame is rendered)",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.skip_existing = true;
-              return Status();
-          } },
+          switch_on(&CliArgs::skip_existing) },
         { "--skip-missing", nullptr, "",
           "Sequences: a missing input frame is skipped with a warning and counted, instead of "
           "an error. Default: off (an error naming the frame)",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.skip_missing = true;
-              return Status();
-          } },
+          switch_on(&CliArgs::skip_missing) },
         { "--dry-run", nullptr, "",
           "Render nothing: print on stdout, one JSON object per line, each image the command "
           "would render (frame, input, output, stats, preview, input_exists, error: what the "
           "render would refuse from the input's header, else null; settings_hash, up_to_date "
           "as --skip-existing judges it) and exit. For scripts and farms",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.dry_run = true;
-              return Status();
-          } },
+          switch_on(&CliArgs::dry_run) },
         { "--report-json", nullptr, "",
           "Print on stdout, one JSON object per line, what became of each image as it ends "
           "(frame: null for one image; output; outcome: rendered, up_to_date or missing_input; "
           "seconds). For scripts and farms. Default: off",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.report_json = true;
-              return Status();
-          } },
+          switch_on(&CliArgs::report_json) },
         { "--stats", nullptr, "FILE.json",
           "Also write render statistics as JSON (timings, grain counts, input pixels)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.stats_path.empty(), "--stats", v, "file name", a.stats_path);
-          } },
+          name_once("--stats", "file name",
+                    [](CliArgs& a) -> std::string& { return a.stats_path; }) },
         { "--preview", nullptr, "FILE.png",
           "Also write an 8-bit sRGB PNG positive for viewing (see Preview below)",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.preview_path.empty(), "--preview", v,
-                              "file name", a.preview_path);
-          } },
+          name_once("--preview", "file name",
+                    [](CliArgs& a) -> std::string& { return a.preview_path; }) },
         { "--threads", nullptr, "N",
           "Worker threads (default: 0 = all hardware threads)",
           [](CliArgs& a, const std::string&, const char* v) { return parse_threads(v, a.threads); } },
         { "--progress", nullptr, "",
           "Show progress on stderr even when it is not a terminal (default: only on a terminal)",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.progress = true;
-              return Status();
-          } },
+          switch_on(&CliArgs::progress) },
         { "-q", "--quiet", "", "Quiet: print nothing but errors",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.quiet = true;
-              return Status();
-          } },
+          switch_on(&CliArgs::quiet) },
         { "--list-stocks", nullptr, "", "List the built-in stock presets and exit",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.list_stocks = true;
-              return Status();
-          },
+          switch_on(&CliArgs::list_stocks),
           false, true },
         { "--list-options", nullptr, "",
           "Print every option and modifier as JSON (name, value, default, help) and exit: "
           "what filmgrain-farm and studio tools read instead of parsing this help",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.list_options = true;
-              return Status();
-          },
+          switch_on(&CliArgs::list_options),
           false, true },
         { "--print-stock", nullptr, "NAME|FILE",
           "Print a stock (preset or file) as complete JSON, every key resolved, and exit",
-          [](CliArgs& a, const std::string&, const char* v) {
-              return set_once(!a.print_stock.empty(), "--print-stock", v,
-                              "stock name", a.print_stock);
-          },
+          name_once("--print-stock", "stock name",
+                    [](CliArgs& a) -> std::string& { return a.print_stock; }),
           false, true },
         { "--version", nullptr, "", "Print the version and exit",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.version = true;
-              return Status();
-          },
+          switch_on(&CliArgs::version),
           false, true },
         { "--help", "-h", "", "Print this help and exit",
-          [](CliArgs& a, const std::string&, const char*) {
-              a.help = true;
-              return Status();
-          },
+          switch_on(&CliArgs::help),
           false, true },
     };
     return table;
@@ -526,22 +506,23 @@ Status validate_render_args(const CliArgs& a)
     if (!a.preview_path.empty() && lowercase_extension(a.preview_path) != ".png")
         return Status::errorf("--preview '", a.preview_path, "' must be a .png file");
 
-    struct Named {
-        const char* what;
-        const std::string* path;
-    };
-    const Named paths[] = { { "INPUT", &a.input },
-                            { "-o", &a.output },
-                            { "--stats", &a.stats_path },
-                            { "--preview", &a.preview_path } };
-    for (size_t i = 0; i < 4; ++i)
-        for (size_t j = i + 1; j < 4; ++j)
+    const std::array<NamedFile, 4> paths = named_files(a);
+    for (size_t i = 0; i < paths.size(); ++i)
+        for (size_t j = i + 1; j < paths.size(); ++j)
             if (!paths[i].path->empty() && !paths[j].path->empty()
                 && same_file(*paths[i].path, *paths[j].path))
                 return Status::errorf(paths[i].what, " and ", paths[j].what,
                                       " name the same file '", *paths[j].path,
                                       "': refusing to overwrite it");
     return {};
+}
+
+std::array<NamedFile, 4> named_files(const CliArgs& a)
+{
+    return { { { "INPUT", &a.input },
+               { "-o", &a.output },
+               { "--stats", &a.stats_path },
+               { "--preview", &a.preview_path } } };
 }
 
 std::string help_text()

@@ -1,6 +1,7 @@
 // filmgrain CLI: the command line (OIIO::ArgParse) and its help text.
 #pragma once
 
+#include <array>
 #include <string>
 
 #include "input_image.h"
@@ -53,6 +54,16 @@ struct CliArgs {
     bool list_options = false;  ///< --list-options: the option table as JSON
     std::string print_stock;  ///< --print-stock NAME|FILE (empty: not given)
 };
+
+/// One of the files a render names, as the command line names it.
+struct NamedFile {
+    const char* what;  ///< "INPUT", "-o", "--stats", "--preview"
+    const std::string* path;  ///< into the CliArgs; empty: not given
+};
+
+/// INPUT, -o, --stats and --preview of `a`, in that order (the order of a
+/// FrameJob's files).
+std::array<NamedFile, 4> named_files(const CliArgs& a);
 
 /// Parses argv (argv[0] is the program). Errors name the option and say
 /// what is wrong. Never throws.

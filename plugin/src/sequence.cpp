@@ -143,14 +143,7 @@ std::string frame_path(const FramePattern& pattern, int frame)
 Status plan_frames(const CliArgs& a, std::vector<FrameJob>& jobs)
 {
     jobs.clear();
-    struct Named {
-        const char* what;
-        const std::string* path;
-    };
-    const Named files[] = { { "INPUT", &a.input },
-                            { "-o", &a.output },
-                            { "--stats", &a.stats_path },
-                            { "--preview", &a.preview_path } };
+    const std::array<NamedFile, 4> files = named_files(a);
     std::string list = a.frames;
     FramePattern input_pattern;
     if (!a.input.empty() && is_frame_pattern(a.input)) {
@@ -164,7 +157,7 @@ Status plan_frames(const CliArgs& a, std::vector<FrameJob>& jobs)
         }
     }
     if (list.empty()) {
-        for (const Named& f : files)
+        for (const NamedFile& f : files)
             if (!f.path->empty() && is_frame_pattern(*f.path))
                 return Status::errorf(f.what, " '", *f.path,
                                       "' is a frame pattern: give the frames with --frames "
