@@ -437,19 +437,55 @@ Status check_tolerance(double tolerance_xy)
 
 }  // namespace
 
-struct InputConverter::Impl {
+// --- Converter ---------------------------------------------------------------
+
+struct Converter::Impl {
     ConfigInfo info;
+    std::string source, destination;
+    OCIO::ConstCPUProcessorRcPtr cpu;
+    bool noop = true;
+};
+
+Converter::Converter(std::unique_ptr<Impl> impl)
+    : m_impl(std::move(impl))
+{
+}
+
+Converter::~Converter() = default;
+
+void Converter::apply_rgb(float* rgb, size_t npixels) const
+{
+    if (!rgb || npixels == 0 || m_impl->noop)
+        return;
+    run_cpu(m_impl->cpu, rgb, npixels, 3);
+}
+
+void Converter::apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const
+{
+    if (!pixels || npixels == 0 || nchannels < 3 || m_impl->noop)
+        return;
+    run_cpu(m_impl->cpu, pixels, npixels, nchannels);
+}
+
+bool Converter::is_noop() const { return m_impl->noop; }
+
+const ConfigInfo& Converter::config() const { return m_impl->info; }
+
+const std::string& Converter::source_name() const { return m_impl->source; }
+
+const std::string& Converter::destination_name() const { return m_impl->destination; }
+
+// --- InputConverter ----------------------------------------------------------
+
+struct InputConverter::Names {
     std::string source_colorspace;
     std::string scene_linear_colorspace;
     std::string via_colorspace;
-    OCIO::ConstCPUProcessorRcPtr cpu;
-    bool noop = true;
-
-    void run(float* first, size_t count, int stride) const { run_cpu(cpu, first, count, stride); }
 };
 
-InputConverter::InputConverter(std::unique_ptr<Impl> impl)
-    : m_impl(std::move(impl))
+InputConverter::InputConverter(std::unique_ptr<Impl> impl, std::unique_ptr<Names> names)
+    : Converter(std::move(impl))
+    , m_names(std::move(names))
 {
 }
 
@@ -467,10 +503,13 @@ Status InputConverter::create(const std::string& config_path,
             return s;
         if (Status s = lookup_colorspace(config, info, src_colorspace, src); !s.ok())
             return s;
-        auto impl                     = std::make_unique<Impl>();
-        impl->info                    = info;
-        impl->source_colorspace       = src_colorspace;
-        impl->scene_linear_colorspace = linear->getName();
+        auto impl         = std::make_unique<Impl>();
+        impl->info        = info;
+        impl->source      = src->getName();
+        impl->destination = linear->getName();
+        auto names        = std::make_unique<Names>();
+        names->source_colorspace       = src_colorspace;
+        names->scene_linear_colorspace = linear->getName();
         try {
             OCIO::ConstProcessorRcPtr proc
                 = config.getProcessor(src->getName(), linear->getName());
@@ -484,41 +523,22 @@ Status InputConverter::create(const std::string& config_path,
                                   describe(info), ": ", e.what());
         }
         impl->noop = impl->cpu->isNoOp();
-        out.reset(new InputConverter(std::move(impl)));
+        out.reset(new InputConverter(std::move(impl), std::move(names)));
         return Status();
     });
 }
 
-void InputConverter::apply_rgb(float* rgb, size_t npixels) const
-{
-    if (!rgb || npixels == 0 || m_impl->noop)
-        return;
-    m_impl->run(rgb, npixels, 3);
-}
-
-void InputConverter::apply_rgb_strided(float* pixels, size_t npixels,
-                                       int nchannels) const
-{
-    if (!pixels || npixels == 0 || nchannels < 3 || m_impl->noop)
-        return;
-    m_impl->run(pixels, npixels, nchannels);
-}
-
-bool InputConverter::is_noop() const { return m_impl->noop; }
-
-const ConfigInfo& InputConverter::config() const { return m_impl->info; }
-
 const std::string& InputConverter::source_colorspace() const
 {
-    return m_impl->source_colorspace;
+    return m_names->source_colorspace;
 }
 
 const std::string& InputConverter::scene_linear_colorspace() const
 {
-    return m_impl->scene_linear_colorspace;
+    return m_names->scene_linear_colorspace;
 }
 
-const std::string& InputConverter::via_colorspace() const { return m_impl->via_colorspace; }
+const std::string& InputConverter::via_colorspace() const { return m_names->via_colorspace; }
 
 Status InputConverter::create_from_chromaticities(const std::string& config_path,
                                                   const Chromaticities& xy,
@@ -538,11 +558,13 @@ Status InputConverter::create_from_chromaticities(const std::string& config_path
         if (Status s = plan_route(config, info, linear, xy, route); !s.ok())
             return s;
 
-        auto impl                     = std::make_unique<Impl>();
-        impl->info                    = info;
-        impl->scene_linear_colorspace = linear->getName();
-        impl->via_colorspace          = route.aces->getName();
-        impl->noop                    = within(route.distance_xy, tolerance_xy);
+        auto impl         = std::make_unique<Impl>();
+        impl->info        = info;
+        impl->destination = linear->getName();
+        impl->noop        = within(route.distance_xy, tolerance_xy);
+        auto names        = std::make_unique<Names>();
+        names->scene_linear_colorspace = linear->getName();
+        names->via_colorspace          = route.aces->getName();
         if (!impl->noop) {
             // xy -> AP0 (our matrix), then the config's ACES2065-1 ->
             // scene_linear. OCIO's MatrixTransform takes a row-major 4x4
@@ -562,26 +584,10 @@ Status InputConverter::create_from_chromaticities(const std::string& config_path
             impl->cpu  = config.getProcessor(group)->getDefaultCPUProcessor();
             impl->noop = impl->cpu->isNoOp();
         }
-        out.reset(new InputConverter(std::move(impl)));
+        out.reset(new InputConverter(std::move(impl), std::move(names)));
         return Status();
     });
 }
-
-// --- Converter ---------------------------------------------------------------
-
-struct Converter::Impl {
-    ConfigInfo info;
-    std::string source, destination;
-    OCIO::ConstCPUProcessorRcPtr cpu;
-    bool noop = true;
-};
-
-Converter::Converter(std::unique_ptr<Impl> impl)
-    : m_impl(std::move(impl))
-{
-}
-
-Converter::~Converter() = default;
 
 namespace {
 
@@ -673,28 +679,6 @@ Status Converter::create_display_view(const std::string& config_path,
         return Status();
     });
 }
-
-void Converter::apply_rgb(float* rgb, size_t npixels) const
-{
-    if (!rgb || npixels == 0 || m_impl->noop)
-        return;
-    run_cpu(m_impl->cpu, rgb, npixels, 3);
-}
-
-void Converter::apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const
-{
-    if (!pixels || npixels == 0 || nchannels < 3 || m_impl->noop)
-        return;
-    run_cpu(m_impl->cpu, pixels, npixels, nchannels);
-}
-
-bool Converter::is_noop() const { return m_impl->noop; }
-
-const ConfigInfo& Converter::config() const { return m_impl->info; }
-
-const std::string& Converter::source_name() const { return m_impl->source; }
-
-const std::string& Converter::destination_name() const { return m_impl->destination; }
 
 Status find_colorspace(const std::string& config_path, const std::string& name,
                        std::string& resolved, ConfigInfo* info)

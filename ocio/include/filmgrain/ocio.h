@@ -61,15 +61,80 @@ using Chromaticities = std::array<double, 8>;
 /// by 0.04 in green x).
 constexpr double k_chromaticities_tolerance_xy = 1e-3;
 
-/// Converts pixels from a named colour space to the config's scene_linear
-/// role. The OCIO processor is built once in create(); apply_*() then run it
-/// as a plain loop.
+/// Converts pixels from one colour space to another colour space, or to a
+/// display and view, of one config. The OCIO processor is built once
+/// (create*); apply_*() then run it as a plain loop.
 /// Thread safety: all const member functions may be called concurrently from
 /// any number of threads on distinct (non-overlapping) buffers; the intended
 /// use is one converter per image, apply per tile. Not copyable.
 /// Determinism: the result for a pixel depends only on that pixel's value, not
 /// on how the image is split into calls or threads.
-class InputConverter {
+class Converter {
+public:
+    /// src -> dst, both any colour space name, alias or role the config
+    /// knows (e.g. "ADX16" -> "scene_linear", "scene_linear" -> "ACEScg").
+    /// Errors name the unknown colour space and the config, and list the
+    /// known names. out: set on success, reset on failure.
+    static Status create(const std::string& config_path, const std::string& src_colorspace,
+                         const std::string& dst_colorspace, std::unique_ptr<Converter>& out);
+
+    /// src -> (display, view): the view's transform then the display's
+    /// encoding, as an image viewer shows src. Empty display: the config's
+    /// default display; empty view: that display's default view. Errors
+    /// name the display or view and list the known ones.
+    static Status create_display_view(const std::string& config_path,
+                                      const std::string& src_colorspace,
+                                      const std::string& display, const std::string& view,
+                                      std::unique_ptr<Converter>& out);
+
+    virtual ~Converter();
+    Converter(const Converter&)            = delete;
+    Converter& operator=(const Converter&) = delete;
+
+    /// Converts packed float RGB in place: npixels * 3 floats, no alpha.
+    /// Does nothing when rgb is null, npixels is 0 or is_noop().
+    /// NaN and Inf are passed to OCIO as they are (no crash; what comes out
+    /// depends on the transform: a curve such as sRGB keeps NaN/+Inf/-Inf in
+    /// their channel, a matrix such as ACEScg -> Rec.709 spreads a non-finite
+    /// value to all three channels of that pixel). Pixels are independent:
+    /// a non-finite pixel never affects its neighbours.
+    /// Thread safety: const; safe concurrently on non-overlapping buffers.
+    void apply_rgb(float* rgb, size_t npixels) const;
+
+    /// Converts the first three channels of packed float pixels with
+    /// nchannels (>= 3) channels each; alpha and any further channels are
+    /// never read or written. Does nothing when pixels is null, npixels is 0,
+    /// nchannels < 3 or is_noop(). Same NaN/Inf behaviour as apply_rgb.
+    /// Thread safety: const; safe concurrently on non-overlapping buffers.
+    void apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const;
+
+    /// True when the conversion is an identity, e.g. scene_linear ->
+    /// scene_linear, an alias of the scene_linear space, or a data space such
+    /// as "raw" (OCIO never converts data). Callers may skip the pass.
+    bool is_noop() const;
+
+    /// The config this converter was built from.
+    const ConfigInfo& config() const;
+
+    /// The resolved names: the source colour space, and the destination
+    /// colour space or "display / view".
+    const std::string& source_name() const;
+    const std::string& destination_name() const;
+
+protected:
+    struct Impl;
+    explicit Converter(std::unique_ptr<Impl> impl);
+
+private:
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// Converts pixels from a named colour space, or from chromaticities, to the
+/// config's scene_linear role: a Converter (applied, threaded and
+/// deterministic as one) that also says how it got there. Its
+/// source_name() is the resolved source colour space ("" from
+/// chromaticities), its destination_name() the scene_linear colour space.
+class InputConverter : public Converter {
 public:
     /// Loads the config (see the resolution rules at the top of this header),
     /// resolves src_colorspace and builds the CPU processor
@@ -118,34 +183,7 @@ public:
                                              double tolerance_xy
                                              = k_chromaticities_tolerance_xy);
 
-    ~InputConverter();
-    InputConverter(const InputConverter&)            = delete;
-    InputConverter& operator=(const InputConverter&) = delete;
-
-    /// Converts packed float RGB in place: npixels * 3 floats, no alpha.
-    /// Does nothing when rgb is null, npixels is 0 or is_noop().
-    /// NaN and Inf are passed to OCIO as they are (no crash; what comes out
-    /// depends on the transform: a curve such as sRGB keeps NaN/+Inf/-Inf in
-    /// their channel, a matrix such as ACEScg -> Rec.709 spreads a non-finite
-    /// value to all three channels of that pixel). Pixels are independent:
-    /// a non-finite pixel never affects its neighbours.
-    /// Thread safety: const; safe concurrently on non-overlapping buffers.
-    void apply_rgb(float* rgb, size_t npixels) const;
-
-    /// Converts the first three channels of packed float pixels with
-    /// nchannels (>= 3) channels each; alpha and any further channels are
-    /// never read or written. Does nothing when pixels is null, npixels is 0,
-    /// nchannels < 3 or is_noop(). Same NaN/Inf behaviour as apply_rgb.
-    /// Thread safety: const; safe concurrently on non-overlapping buffers.
-    void apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const;
-
-    /// True when the conversion is an identity, e.g. scene_linear ->
-    /// scene_linear, an alias of the scene_linear space, or a data space such
-    /// as "raw" (OCIO never converts data). Callers may skip the pass.
-    bool is_noop() const;
-
-    /// The config this converter was built from.
-    const ConfigInfo& config() const;
+    ~InputConverter() override;
 
     /// The source colour space exactly as the caller gave it; "" when built
     /// by create_from_chromaticities.
@@ -160,51 +198,9 @@ public:
     const std::string& scene_linear_colorspace() const;
 
 private:
-    struct Impl;
-    explicit InputConverter(std::unique_ptr<Impl> impl);
-    std::unique_ptr<Impl> m_impl;
-};
-
-/// Converts pixels from one colour space to another colour space, or to a
-/// display and view, of one config. Built once (create*), applied per tile;
-/// same threading, determinism and NaN/Inf behaviour as InputConverter.
-/// Not copyable.
-class Converter {
-public:
-    /// src -> dst, both any colour space name, alias or role the config
-    /// knows (e.g. "ADX16" -> "scene_linear", "scene_linear" -> "ACEScg").
-    /// Errors name the unknown colour space and the config, and list the
-    /// known names. out: set on success, reset on failure.
-    static Status create(const std::string& config_path, const std::string& src_colorspace,
-                         const std::string& dst_colorspace, std::unique_ptr<Converter>& out);
-
-    /// src -> (display, view): the view's transform then the display's
-    /// encoding, as an image viewer shows src. Empty display: the config's
-    /// default display; empty view: that display's default view. Errors
-    /// name the display or view and list the known ones.
-    static Status create_display_view(const std::string& config_path,
-                                      const std::string& src_colorspace,
-                                      const std::string& display, const std::string& view,
-                                      std::unique_ptr<Converter>& out);
-
-    ~Converter();
-    Converter(const Converter&)            = delete;
-    Converter& operator=(const Converter&) = delete;
-
-    /// As InputConverter::apply_rgb / apply_rgb_strided.
-    void apply_rgb(float* rgb, size_t npixels) const;
-    void apply_rgb_strided(float* pixels, size_t npixels, int nchannels) const;
-    bool is_noop() const;
-    const ConfigInfo& config() const;
-    /// The resolved names: the source colour space, and the destination
-    /// colour space or "display / view".
-    const std::string& source_name() const;
-    const std::string& destination_name() const;
-
-private:
-    struct Impl;
-    explicit Converter(std::unique_ptr<Impl> impl);
-    std::unique_ptr<Impl> m_impl;
+    struct Names;
+    InputConverter(std::unique_ptr<Impl> impl, std::unique_ptr<Names> names);
+    std::unique_ptr<Names> m_names;
 };
 
 /// Resolves `name` (a colour space, alias or role, case-insensitive) in the
