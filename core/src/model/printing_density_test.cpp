@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "filmgrain/expected_curve.h"
+#include "testing/test_stock_json.h"
 
 namespace filmgrain {
 namespace {
@@ -188,15 +189,6 @@ TEST(PrintingDensity, StockKeyParsesAndRoundTrips)
     ASSERT_TRUE(parse_stock_json(std::string("{") + kRgbLayers + "}", "t", plain));
     EXPECT_FALSE(plain.status_m_to_apd);
     EXPECT_EQ(stock_to_json(plain).find("printing_density"), std::string::npos);
-}
-
-void expect_stock_error(const std::string& json, const std::string& needle)
-{
-    Stock s;
-    const Status st = parse_stock_json(json, "test.json", s);
-    ASSERT_FALSE(st) << json;
-    EXPECT_NE(st.message().find(needle), std::string::npos)
-        << "message: " << st.message() << "\nexpected to contain: " << needle;
 }
 
 TEST(PrintingDensity, StockKeyErrorsNameTheKey)

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "testing/test_stock_json.h"
+
 namespace filmgrain {
 namespace {
 
@@ -48,46 +50,36 @@ TEST(Stock, AbsentKeysTakeDefaults)
     EXPECT_EQ(s.layers[0].populations[0].k_pair_per_s, Population().k_pair_per_s);
 }
 
-void expect_error(const std::string& json, const std::string& needle)
-{
-    Stock s;
-    const Status st = parse_stock_json(json, "test.json", s);
-    ASSERT_FALSE(st) << json;
-    EXPECT_NE(st.message().find(needle), std::string::npos)
-        << "message: " << st.message() << "\nexpected to contain: " << needle;
-    EXPECT_NE(st.message().find("test.json"), std::string::npos) << st.message();
-}
-
 TEST(Stock, ErrorsNameTheKeyValueAndRange)
 {
-    expect_error("{", "not valid JSON");
-    expect_error("[]", "must be a JSON object");
-    expect_error(R"({"speed": 100})", "unknown key 'speed'");
-    expect_error(R"({"layers": [{"name": "Y", "colour": 1}]})", "unknown key 'layers[0].colour'");
-    expect_error(R"({"layers": [{"populations": [{"diameter": 3}]}]})",
+    expect_stock_error("{", "not valid JSON");
+    expect_stock_error("[]", "must be a JSON object");
+    expect_stock_error(R"({"speed": 100})", "unknown key 'speed'");
+    expect_stock_error(R"({"layers": [{"name": "Y", "colour": 1}]})", "unknown key 'layers[0].colour'");
+    expect_stock_error(R"({"layers": [{"populations": [{"diameter": 3}]}]})",
                  "unknown key 'layers[0].populations[0].diameter'");
-    expect_error(R"({"fog_tau_s": "slow"})", "fog_tau_s must be a number, not string");
-    expect_error(R"({"layers": [{"populations": [{"diameter_um": -1}]}]})",
+    expect_stock_error(R"({"fog_tau_s": "slow"})", "fog_tau_s must be a number, not string");
+    expect_stock_error(R"({"layers": [{"populations": [{"diameter_um": -1}]}]})",
                  "layers[0].populations[0].diameter_um = -1: must be in [0.01, 1000]");
-    expect_error(R"({"max_density": 0})", "max_density = 0: must be in (0, 20]");
-    expect_error(R"({"layers": [{"sensitivity": [1, 2]}]})", "sensitivity must be an array of 3");
-    expect_error(R"({"layers": [{"sensitivity": [0, 0, 0]}]})", "all zero");
-    expect_error(R"({"layers": [{"name": "A"}, {"name": "A"}]})", "repeats");
-    expect_error(R"({"layers": []})", "layers has 0 entries");
-    expect_error(R"({"layers": [{"populations": []}]})", "populations has 0 entries");
-    expect_error(R"({"name": 5})", "name must be a string");
-    expect_error(R"({"layers": {}})", "layers must be an array");
-    expect_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.5}]}]})",
+    expect_stock_error(R"({"max_density": 0})", "max_density = 0: must be in (0, 20]");
+    expect_stock_error(R"({"layers": [{"sensitivity": [1, 2]}]})", "sensitivity must be an array of 3");
+    expect_stock_error(R"({"layers": [{"sensitivity": [0, 0, 0]}]})", "all zero");
+    expect_stock_error(R"({"layers": [{"name": "A"}, {"name": "A"}]})", "repeats");
+    expect_stock_error(R"({"layers": []})", "layers has 0 entries");
+    expect_stock_error(R"({"layers": [{"populations": []}]})", "populations has 0 entries");
+    expect_stock_error(R"({"name": 5})", "name must be a string");
+    expect_stock_error(R"({"layers": {}})", "layers must be an array");
+    expect_stock_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.5}]}]})",
                  "quantum_efficiency = 1.5: must be in [0, 1]");
-    expect_error(R"({"exposure_at_grey_lxs": true})", "must be a number, not boolean");
+    expect_stock_error(R"({"exposure_at_grey_lxs": true})", "must be a number, not boolean");
     // Numbers in the fewest digits that read back as themselves.
-    expect_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.4}]}]})",
+    expect_stock_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.4}]}]})",
                  "quantum_efficiency = 1.4: must be in [0, 1]");
-    expect_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.0000000000000002}]}]})",
+    expect_stock_error(R"({"layers": [{"populations": [{"quantum_efficiency": 1.0000000000000002}]}]})",
                  "quantum_efficiency = 1.0000000000000002: must be in [0, 1]");
-    expect_error(R"({"exposure_at_grey_lxs": 2e6})",
+    expect_stock_error(R"({"exposure_at_grey_lxs": 2e6})",
                  "exposure_at_grey_lxs = 2000000: must be in (0, 1000000]");
-    expect_error(R"({"exposure_at_grey_lxs": -2.5e-7})", "exposure_at_grey_lxs = -2.5e-07");
+    expect_stock_error(R"({"exposure_at_grey_lxs": -2.5e-7})", "exposure_at_grey_lxs = -2.5e-07");
 }
 
 TEST(Stock, UnknownPresetOrMissingFile)
