@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "util/bracket.h"
+
 namespace filmgrain::sensitometry {
 
 Status exposure_for_net_density(const Stock& stock, double shutter_s, double net_density,
@@ -39,23 +41,17 @@ Status exposure_for_net_density(const Stock& stock, double shutter_s, double net
     double x = guess_log10_h, y, s;
     if (Status st = measure(x, y, s); !st)
         return st;
-    const double dir = y < net_density ? 1.0 : -1.0;
-    double x_lo = x, x_hi = x;
-    for (int i = 0;; ++i) {
-        if (i == 40)
-            return Status::errorf("net density ", net_density, " not reached at shutter ",
-                                  shutter_s, " s between log10 H = ", guess_log10_h, " and ", x);
-        const double x2 = x + dir * kStep;
-        double y2, s2;
-        if (Status st = measure(x2, y2, s2); !st)
-            return st;
-        if ((y2 - net_density) * dir >= 0.0) {
-            x_lo = std::min(x, x2);
-            x_hi = std::max(x, x2);
-            break;
-        }
-        x = x2;
-    }
+    Bracket br;
+    const auto value = [&](double at, double& value_out) {
+        double unused_se;
+        return measure(at, value_out, unused_se);
+    };
+    if (Status st = bracket_crossing(value, x, y, net_density, kStep, 40, br); !st)
+        return st;
+    if (!br.found)
+        return Status::errorf("net density ", net_density, " not reached at shutter ",
+                              shutter_s, " s between log10 H = ", guess_log10_h, " and ", br.x);
+    const double x_lo = br.lo, x_hi = br.hi;
     for (double f : { 1.0 / 3.0, 2.0 / 3.0 }) {
         double yy, ss;
         if (Status st = measure(x_lo + f * (x_hi - x_lo), yy, ss); !st)

@@ -14,6 +14,7 @@
 #include "expect/grain_counts.h"
 #include "model/kinetics.h"
 #include "kernels/pixel_model.h"
+#include "util/bracket.h"
 
 namespace filmgrain {
 
@@ -246,23 +247,13 @@ Status exposure_for_predicted_density(const Stock& stock, size_t layer, double n
     double x = log10_h_guess, d = 0.0;
     if (Status s = density_at(x, d); !s)
         return s;
-    const double dir = d < net_density ? 0.5 : -0.5;
-    double a = x, b = x;
-    for (int i = 0;; ++i) {
-        if (i == 12)
-            return Status::errorf("predicted net density ", net_density, " not reached within 6 "
-                                  "decades of log10 H = ", log10_h_guess, " (last: ", d, ")");
-        const double x2 = x + dir;
-        double d2 = 0.0;
-        if (Status s = density_at(x2, d2); !s)
-            return s;
-        if ((d2 - net_density) * dir >= 0.0) {
-            a = std::min(x, x2);
-            b = std::max(x, x2);
-            break;
-        }
-        x = x2;
-    }
+    Bracket br;
+    if (Status s = bracket_crossing(density_at, x, d, net_density, 0.5, 12, br); !s)
+        return s;
+    if (!br.found)
+        return Status::errorf("predicted net density ", net_density, " not reached within 6 "
+                              "decades of log10 H = ", log10_h_guess, " (last: ", br.y, ")");
+    double a = br.lo, b = br.hi;
     while (b - a > 0.002) {
         const double m = 0.5 * (a + b);
         double dm = 0.0;
