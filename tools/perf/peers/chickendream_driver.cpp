@@ -47,6 +47,18 @@ double mean_of(const std::vector<float> &v)
 	return v.empty() ? 0.0 : s / double(v.size());
 }
 
+// Runs body(t) for every t in [0, n), each on a thread of its own, and
+// waits for them all.
+template <typename Body>
+void run_threads(int n, const Body &body)
+{
+	std::vector<std::thread> pool;
+	for (int t = 0; t < n; ++t)
+		pool.emplace_back([&body, t] { body(t); });
+	for (auto &th : pool)
+		th.join();
+}
+
 } // namespace
 
 int main(int argc, char **argv)
@@ -113,22 +125,12 @@ int main(int argc, char **argv)
 
 	fgrn::GenGrain gen(true, avx); // SSE2 path always, AVX path unless --noavx
 	const int n = gen.mt_start(dst.data(), src.data(), w, h, w, w, filter, seed, draft, threads);
-	{
-		std::vector<std::thread> pool;
-		for (int t = 0; t < n; ++t)
-			pool.emplace_back([&gen, t] { gen.mt_proc_pass1(t); });
-		for (auto &th : pool)
-			th.join();
-	}
+	run_threads(n, [&gen](int t) { gen.mt_proc_pass1(t); });
 	const auto t3 = std::chrono::steady_clock::now();
 	if (!draft)
 	{
 		gen.mt_prepare_pass2();
-		std::vector<std::thread> pool;
-		for (int t = 0; t < n; ++t)
-			pool.emplace_back([&gen, t] { gen.mt_proc_pass2(t); });
-		for (auto &th : pool)
-			th.join();
+		run_threads(n, [&gen](int t) { gen.mt_proc_pass2(t); });
 	}
 	const auto t4 = std::chrono::steady_clock::now();
 
