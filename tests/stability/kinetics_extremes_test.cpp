@@ -65,6 +65,22 @@ std::string describe(const KineticsQuery& q)
     return s.str();
 }
 
+/// Calls f(engine, query) for every engine that samples grains and the
+/// query of `photons` photons with each combination of rates from `grid`
+/// and each shutter of `shutters`.
+template<typename F>
+void for_each_sampled_case(const std::vector<double>& grid, const std::vector<double>& shutters,
+                           uint64_t photons, const F& f)
+{
+    for (const KineticsEngine& engine : kinetics_engines()) {
+        if (!engine.sample)
+            continue;
+        for (const KineticsRates& rates : rate_combinations(grid))
+            for (double shutter_s : shutters)
+                f(engine, KineticsQuery { photons, shutter_s, rates });
+    }
+}
+
 /// Developments at the extremes of MODEL.md 4 (stock ranges allow them).
 struct NamedDevelopment {
     const char* name;
@@ -118,19 +134,14 @@ TEST(StabilityKinetics, SameStreamSameGrain)
 {
     // Determinism at the extremes: the stream alone decides the outcome.
     const Development dev(development_stock(360, 120, 5000));
-    for (const KineticsEngine& engine : kinetics_engines()) {
-        if (!engine.sample)
-            continue;
-        for (const KineticsRates& rates : rate_combinations(kCoarseRateGrid))
-            for (double shutter_s : { 1e-9, 1e6 }) {
-                const KineticsQuery q { 200, shutter_s, rates };
-                Rng a(hash_ids(0xde7, 1), Stage::kinetics), b(hash_ids(0xde7, 1), Stage::kinetics);
-                uint64_t ea = 0, eb = 0;
-                const LatentImage ca = engine.sample(q, dev, a, &ea);
-                const LatentImage cb = engine.sample(q, dev, b, &eb);
-                ASSERT_TRUE(ca == cb && ea == eb) << engine.name << ": " << describe(q);
-            }
-    }
+    const auto same = [&](const KineticsEngine& engine, const KineticsQuery& q) {
+        Rng a(hash_ids(0xde7, 1), Stage::kinetics), b(hash_ids(0xde7, 1), Stage::kinetics);
+        uint64_t ea = 0, eb = 0;
+        const LatentImage ca = engine.sample(q, dev, a, &ea);
+        const LatentImage cb = engine.sample(q, dev, b, &eb);
+        EXPECT_TRUE(ca == cb && ea == eb) << engine.name << ": " << describe(q);
+    };
+    for_each_sampled_case(kCoarseRateGrid, { 1e-9, 1e6 }, 200, same);
 }
 
 TEST(StabilityKinetics, LargePhotonCountsStayBoundedAndQuick)
@@ -141,19 +152,17 @@ TEST(StabilityKinetics, LargePhotonCountsStayBoundedAndQuick)
     // below catches a run that is merely far too slow (events <= N bounds
     // the work at ~2N chain steps).
     const Development dev(development_stock(360, 120, 5000));
-    const std::vector<double> corners = { 0.0, 1e-9, 1e12 };
+    const auto bounded = [&](const KineticsEngine& engine, const KineticsQuery& q) {
+        Rng rng(hash_ids(0x1e5, 1), Stage::kinetics);
+        uint64_t events     = 0;
+        const LatentImage c = engine.sample(q, dev, rng, &events);
+        EXPECT_TRUE(chain_bookkeeping(c, events, q.photons, q.rates, engine.exact))
+            << engine.name << ": " << describe(q);
+    };
+    for_each_sampled_case(kCornerRateGrid, { 1e-9, 1e6 }, 100000, bounded);
     for (const KineticsEngine& engine : kinetics_engines()) {
         if (!engine.sample)
             continue;
-        for (const KineticsRates& rates : rate_combinations(corners))
-            for (double shutter_s : { 1e-9, 1e6 }) {
-                const KineticsQuery q { 100000, shutter_s, rates };
-                Rng rng(hash_ids(0x1e5, 1), Stage::kinetics);
-                uint64_t events     = 0;
-                const LatentImage c = engine.sample(q, dev, rng, &events);
-                EXPECT_TRUE(chain_bookkeeping(c, events, q.photons, rates, engine.exact))
-                    << engine.name << ": " << describe(q);
-            }
         for (const KineticsQuery& q :
              { KineticsQuery { 10000000, 1e-9, { 1e7, 1e6, 10 } },
                KineticsQuery { 10000000, 1e6, { 1e12, 1e-9, 1e3 } } }) {
