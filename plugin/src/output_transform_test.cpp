@@ -18,6 +18,18 @@
 namespace filmgrain::cli {
 namespace {
 
+/// `s` is an error whose message contains `needle`.
+::testing::AssertionResult fails_with(const Status& s, const std::string& needle)
+{
+    if (s)
+        return ::testing::AssertionFailure() << "succeeded; expected an error containing: "
+                                             << needle;
+    if (s.message().find(needle) == std::string::npos)
+        return ::testing::AssertionFailure() << "message: " << s.message()
+                                             << "\nexpected to contain: " << needle;
+    return ::testing::AssertionSuccess();
+}
+
 /// A density image as the operator makes it: layers R, G, B, full window
 /// the scan.
 OIIO::ImageBuf density_image(int w, int h, const float* values)
@@ -126,11 +138,9 @@ TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
     // timing= with another output: refused, naming it.
     OutputRequest dens_timed;
     dens_timed.timing = AdxTiming::grey;
-    const Status v = apply_output(dens_timed, opts, OIIO::ImageBuf(), density, out, report);
-    ASSERT_FALSE(v);
-    EXPECT_NE(v.message().find("timing=grey applies to output=adx10 and adx16 only"),
-              std::string::npos)
-        << v.message();
+    EXPECT_TRUE(fails_with(
+        apply_output(dens_timed, opts, OIIO::ImageBuf(), density, out, report),
+        "timing=grey applies to output=adx10 and adx16 only"));
     // Density: unchanged, tagged.
     OutputRequest dens;
     OIIO::ImageBuf same;
@@ -141,21 +151,15 @@ TEST(OutputTransform, ApplyAdxWritesCodeValuesAndMetadata)
     // --ocolorspace with ADX: refused, naming it.
     req.timing      = AdxTiming::off;
     req.ocolorspace = "ACEScg";
-    const Status t2 = apply_output(req, opts, OIIO::ImageBuf(), density, out, report);
-    ASSERT_FALSE(t2);
-    EXPECT_NE(t2.message().find("--ocolorspace ACEScg applies to output=regrain only"),
-              std::string::npos)
-        << t2.message();
+    EXPECT_TRUE(fails_with(apply_output(req, opts, OIIO::ImageBuf(), density, out, report),
+                           "--ocolorspace ACEScg applies to output=regrain only"));
     // A two-layer stock cannot be ADX.
     FilmgrainOptions two = opts;
     two.stock.layers.pop_back();
     two.stock.status_m_to_apd.reset();
     req.ocolorspace.clear();
-    const Status u = apply_output(req, two, OIIO::ImageBuf(), density, out, report);
-    ASSERT_FALSE(u);
-    EXPECT_NE(u.message().find("output=adx16: ADX needs the layers named R, G and B"),
-              std::string::npos)
-        << u.message();
+    EXPECT_TRUE(fails_with(apply_output(req, two, OIIO::ImageBuf(), density, out, report),
+                           "output=adx16: ADX needs the layers named R, G and B"));
     // A stock without a map (the paper's colour negative): APD = Status M,
     // said in the metadata; CDD = k (D - D-min).
     FilmgrainOptions plain = opts;
@@ -341,17 +345,12 @@ TEST(OutputTransform, RegrainRefusesAnotherScanSizeAndTooManyLayers)
     OIIO::ImageBufAlgo::fill(src, { 0.18f, 0.18f, 0.18f });
     opts.scan_width = 4;
     OIIO::ImageBuf density, out;
-    const Status s = render_regrain(src, opts, density, out);
-    ASSERT_FALSE(s);
-    EXPECT_NE(s.message().find("needs the scan at the input's size (8x8): the scan is 4x4"),
-              std::string::npos)
-        << s.message();
+    EXPECT_TRUE(fails_with(render_regrain(src, opts, density, out),
+                           "needs the scan at the input's size (8x8): the scan is 4x4"));
     Stock two = opts.stock;
     two.layers.pop_back();
     RegrainModel m;
-    const Status t = make_regrain_model(two, {}, m);
-    ASSERT_FALSE(t);
-    EXPECT_NE(t.message().find("has 2 layers"), std::string::npos) << t.message();
+    EXPECT_TRUE(fails_with(make_regrain_model(two, {}, m), "has 2 layers"));
 }
 
 }  // namespace

@@ -448,7 +448,8 @@ void dye_transmittance(const std::vector<Disc>& grains, const std::vector<size_t
     const auto rows = [&](size_t i, int64_t& r0, int64_t& r1) {
         const Disc& g       = grains[i];
         const double extent = reach * g.r_um;
-        r0 = std::max<int64_t>(y0, static_cast<int64_t>(std::floor((g.y_um - extent) / py_um))) - y0;
+        r0 = std::max<int64_t>(y0, static_cast<int64_t>(std::floor((g.y_um - extent) / py_um)))
+             - y0;
         r1 = std::min<int64_t>(y1 - 1, static_cast<int64_t>(std::floor((g.y_um + extent) / py_um)))
              - y0;
     };
