@@ -28,7 +28,9 @@ scatter, inhibitors and dye clouds, MODEL.md 8-10) and with `no-remjet`
                                 and the preview now (the same, timed on the
                                 stock's grey); each through the config's sRGB
                                 / ACES 1.0 SDR view
-and prints each render's time. Usage (from the repository root, after
+and prints each render's time, and what keeps the wedge's preview from
+neutral (`wedge neutrality`: the preview, the steps' mean transmittance
+through the same chain, and the stock's published curves through it). Usage (from the repository root, after
 scripts/build):  tools/look/look_pictures.py [--filmgrain build/plugin/filmgrain]
 [--only preview_before_after]
 """
@@ -86,6 +88,70 @@ def adx_view(code, colorspace):
     return np.round(255.0 * np.clip(out.get_pixels(oiio.FLOAT), 0.0, 1.0)).astype(np.uint8)
 
 
+# The published datasheet each fitted stock was fitted to (stocks/datasheets).
+SHEETS = {"vision3-500t": "kodak-vision3-500t-5219.json",
+          "vision3-250d": "kodak-vision3-250d-5207.json",
+          "vision3-200t": "kodak-vision3-200t-5213.json"}
+
+
+def display_of_cdd(cdd):
+    """Timed CDD (n, 3) -> the preview's display code values, unrounded
+    (ADX16 -> the config's view, x 255)."""
+    code = (1520.0 + 8000.0 * np.asarray(cdd, np.float64)) / 65535.0
+    buf = oiio.ImageBuf(np.ascontiguousarray(code[None].astype(np.float32)))
+    out = oiio.ImageBufAlgo.ociodisplay(buf, DISPLAY, VIEW, "ADX16", colorconfig=CONFIG)
+    assert not out.has_error, out.geterror()
+    return 255.0 * out.get_pixels(oiio.FLOAT)[0].astype(np.float64)
+
+
+def wedge_neutrality(filmgrain, stock, spec, m, dmin, k, tmp):
+    """What keeps the default wedge's preview from neutral (issue 40's
+    target: the steps from -2 to +2 stops within 3 code values between
+    channels). Prints, per step, the spread of three previews of it: the
+    preview itself (each pixel through the display's curve, then
+    averaged); the render's step means through the same timed chain (the
+    densitometer's -log10 of the mean transmittance: the grain's part left
+    out); and the stock's published curves through the same chain, timed on
+    their own grey (what a fit that met its datasheet exactly would give)."""
+    exr, png = os.path.join(tmp, "neutral.exr"), os.path.join(tmp, "neutral.png")
+    subprocess.run([filmgrain, "--wedge", f"--filmgrain:stock={stock}:output=adx16:timing=grey",
+                    "-o", os.path.join(tmp, "neutral_adx.exr"), "-q"], check=True)
+    timing = oiio.ImageBuf(os.path.join(tmp, "neutral_adx.exr")).spec().get_string_attribute(
+        "filmgrain:adx_timing")
+    parts = dict(p.split() for p in timing.split(": ", 1)[1].split(", "))
+    offsets = np.array([float(parts[c]) for c in "RGB"])
+    subprocess.run([filmgrain, "--wedge", f"--filmgrain:stock={stock}", "-o", exr,
+                    "--preview", png, "-q"], check=True)
+    e = oiio.ImageBuf(exr)
+    names = e.spec().channelnames
+    d = e.get_pixels(oiio.FLOAT)[..., [names.index(c) for c in "RGB"]].astype(np.float64)
+    preview = oiio.ImageBuf(png).get_pixels(oiio.UINT8).astype(np.float64)
+    steps = [(i, -8.0 + 0.75 * i) for i in range(21) if -2.0 <= -8.0 + 0.75 * i <= 2.0]
+    mean_d = np.array([-np.log10(np.mean(10.0 ** -d[:, i * 48:(i + 1) * 48].reshape(-1, 3),
+                                         axis=0)) for i, _ in steps])
+    from_means = display_of_cdd(k * ((mean_d - dmin) @ m.T) + offsets)
+    published = None
+    if stock in SHEETS:
+        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+        with open(os.path.join(root, "stocks", "datasheets", SHEETS[stock])) as f:
+            sheet = json.load(f)
+        layers = {layer["name"]: layer for layer in sheet["layers"]}
+        sm = np.array(sheet["printing_density"]["status_m_to_apd"]["matrix"])
+        log_h = np.log10(spec["exposure_at_grey_lxs"]) + np.array(
+            [0.0] + [s for _, s in steps]) * np.log10(2.0)
+        dd = np.array([[np.interp(x, layers[c]["curve"]["log_h"], layers[c]["curve"]["density"])
+                        for c in "RGB"] for x in log_h])
+        cdd = k * ((dd - np.array([layers[c]["d_min"] for c in "RGB"])) @ sm.T)
+        published = display_of_cdd(cdd[1:] + (0.70 - cdd[0]))
+    for j, (i, stops) in enumerate(steps):
+        px = np.ptp(preview[:, i * 48:(i + 1) * 48].reshape(-1, 3).mean(axis=0))
+        line = (f"wedge neutrality {stops:+.2f} stops: preview {px:.1f}; "
+                f"step means through the chain {np.ptp(from_means[j]):.1f}")
+        if published is not None:
+            line += f"; published curves ({SHEETS[stock]}) {np.ptp(published[j]):.1f}"
+        print(line)
+
+
 def preview_before_after(filmgrain, out_dir, tmp, stock="vision3-500t"):
     """docs/look/preview_before_after.png and the numbers docs/look/README.md
     quotes: per-channel spreads (8-bit) of the wedge's steps and the chart's
@@ -127,6 +193,8 @@ def preview_before_after(filmgrain, out_dir, tmp, stock="vision3-500t"):
     def spread(img, x0, x1, y0, y1):
         mean = img[y0:y1, x0:x1].reshape(-1, 3).astype(np.float64).mean(axis=0)
         return mean, float(np.ptp(mean))
+
+    wedge_neutrality(filmgrain, stock, spec, m, dmin, k, tmp)
 
     for scene, *imgs in rows:
         labels = ("before", "adx16 untimed", "after (preview)")
