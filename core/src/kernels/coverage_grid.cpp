@@ -1,14 +1,14 @@
 // Exact coverage of a block of pixels (coverage_grid.h).
 #include "kernels/coverage_grid.h"
 
-#include "util/bucket.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <utility>
 #include <vector>
+
+#include "util/bucket.h"
 
 namespace filmgrain {
 

@@ -1,14 +1,14 @@
 // Coverage on sub-scanlines (coverage_scanline.h).
 #include "kernels/coverage_scanline.h"
 
-#include "util/bucket.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <utility>
 #include <vector>
+
+#include "util/bucket.h"
 
 namespace filmgrain {
 
