@@ -172,7 +172,8 @@ const std::vector<OptionSpec>& option_table()
         { "--iscolorspace", nullptr, "NAME",
           "Colour space of INPUT (default: the file's oiio:ColorSpace when the config knows "
           "it, else an EXR's chromaticities (its primaries and white), else scene_linear)",
-          colour_space_once("--iscolorspace", &CliArgs::iscolorspace, &CliArgs::has_iscolorspace) },
+          colour_space_once("--iscolorspace", &CliArgs::iscolorspace,
+                            &CliArgs::has_iscolorspace) },
         { "--subimage", nullptr, "N|NAME",
           "Part of a multi-part INPUT to read, by index (from 0) or name (as oiiotool's "
           "--subimage; default: the first part with the channels)",
@@ -194,7 +195,8 @@ const std::vector<OptionSpec>& option_table()
         { "--ocolorspace", nullptr, "NAME",
           "Colour space of the output=regrain positive (default: the config's scene_linear); "
           "only with output=regrain",
-          colour_space_once("--ocolorspace", &CliArgs::ocolorspace, &CliArgs::has_ocolorspace) },
+          colour_space_once("--ocolorspace", &CliArgs::ocolorspace,
+                            &CliArgs::has_ocolorspace) },
         { "--filmgrain", nullptr, "",
           "Simulate the film: expose, develop and scan a negative (modifiers below)",
           [](CliArgs& a, const std::string& flag, const char*) {
