@@ -138,13 +138,12 @@ Handler switch_once(const char* flag, bool CliArgs::*member)
 }
 
 /// The handler of --iscolorspace and --ocolorspace: a colour space name
-/// given at most once, and that it was given.
-Handler colour_space_once(const char* flag, std::string CliArgs::*name, bool CliArgs::*given)
+/// given at most once (set even when refused, as set_once).
+Handler colour_space_once(const char* flag, std::optional<std::string> CliArgs::*name)
 {
-    return [flag, name, given](CliArgs& a, const std::string&, const char* v) {
-        const Status s = set_once(a.*given, flag, v, "colour space name", a.*name);
-        a.*given       = true;
-        return s;
+    return [flag, name](CliArgs& a, const std::string&, const char* v) {
+        const bool given = (a.*name).has_value();
+        return set_once(given, flag, v, "colour space name", (a.*name).emplace());
     };
 }
 
@@ -172,8 +171,7 @@ const std::vector<OptionSpec>& option_table()
         { "--iscolorspace", nullptr, "NAME",
           "Colour space of INPUT (default: the file's oiio:ColorSpace when the config knows "
           "it, else an EXR's chromaticities (its primaries and white), else scene_linear)",
-          colour_space_once("--iscolorspace", &CliArgs::iscolorspace,
-                            &CliArgs::has_iscolorspace) },
+          colour_space_once("--iscolorspace", &CliArgs::iscolorspace) },
         { "--subimage", nullptr, "N|NAME",
           "Part of a multi-part INPUT to read, by index (from 0) or name (as oiiotool's "
           "--subimage; default: the first part with the channels)",
@@ -195,8 +193,7 @@ const std::vector<OptionSpec>& option_table()
         { "--ocolorspace", nullptr, "NAME",
           "Colour space of the output=regrain positive (default: the config's scene_linear); "
           "only with output=regrain",
-          colour_space_once("--ocolorspace", &CliArgs::ocolorspace,
-                            &CliArgs::has_ocolorspace) },
+          colour_space_once("--ocolorspace", &CliArgs::ocolorspace) },
         { "--filmgrain", nullptr, "",
           "Simulate the film: expose, develop and scan a negative (modifiers below)",
           [](CliArgs& a, const std::string& flag, const char*) {
@@ -467,9 +464,9 @@ Status validate_render_args(const CliArgs& a)
                               "' and --chart given: render one or the other");
     if (a.wedge && a.chart)
         return Status::error("both --wedge and --chart given: render one or the other");
-    if (a.wedge && a.has_iscolorspace)
+    if (a.wedge && a.iscolorspace)
         return Status::error("--iscolorspace applies to INPUT; the --wedge is scene-linear");
-    if (a.chart && a.has_iscolorspace)
+    if (a.chart && a.iscolorspace)
         return Status::error("--iscolorspace applies to INPUT; the --chart is scene-linear");
     const InputSelection& sel = a.input_selection;
     if ((a.wedge || a.chart)
@@ -480,8 +477,8 @@ Status validate_render_args(const CliArgs& a)
     if (!a.has_filmgrain)
         return Status::error("no --filmgrain command given: nothing to do (--filmgrain alone "
                              "renders with the defaults)");
-    if (a.has_ocolorspace && a.filmgrain.output != OutputKind::regrain)
-        return Status::errorf("--ocolorspace ", a.ocolorspace, " applies to output=regrain only "
+    if (a.ocolorspace && a.filmgrain.output != OutputKind::regrain)
+        return Status::errorf("--ocolorspace ", *a.ocolorspace, " applies to output=regrain only "
                               "(the output is ", output_kind_name(a.filmgrain.output),
                               ": densities and ADX code values have no colour space to choose)");
     if (a.filmgrain.timing != AdxTiming::off && a.filmgrain.output != OutputKind::adx10

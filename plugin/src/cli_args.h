@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 
 #include "input_image.h"
@@ -23,10 +24,8 @@ struct CliArgs {
     bool chart = false;  ///< --chart: the built-in look chart instead of INPUT
 
     std::string colorconfig;  ///< --colorconfig FILE (empty: $OCIO, else embedded)
-    std::string iscolorspace;  ///< --iscolorspace NAME
-    bool has_iscolorspace = false;
-    std::string ocolorspace;  ///< --ocolorspace NAME (output=regrain only)
-    bool has_ocolorspace = false;
+    std::optional<std::string> iscolorspace;  ///< --iscolorspace NAME
+    std::optional<std::string> ocolorspace;  ///< --ocolorspace NAME (output=regrain only)
 
     bool has_filmgrain = false;  ///< --filmgrain given
     FilmgrainCommand filmgrain;

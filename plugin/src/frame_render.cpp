@@ -215,7 +215,7 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
     j["roi"]      = cmd.has_roi ? Json { cmd.roi_x, cmd.roi_y, cmd.roi_width, cmd.roi_height }
                                 : Json(nullptr);
     j["output"]   = { { "kind", output_kind_name(cmd.output) },
-                      { "ocolorspace", a.has_ocolorspace ? a.ocolorspace : "" } };
+                      { "ocolorspace", a.ocolorspace.value_or("") } };
     // ADX and the preview are printing densities with ADX's gains since
     // MODEL.md 11 (issue 40): files written before (Status M, no gains,
     // untimed previews) are not up to date. Density and regrain outputs
@@ -231,7 +231,7 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
     j["color"]    = { { "config", !a.colorconfig.empty() ? a.colorconfig
                                   : ocio_env            ? std::string("$OCIO=") + ocio_env
                                                         : std::string("embedded") },
-                      { "iscolorspace", a.has_iscolorspace ? a.iscolorspace : "" } };
+                      { "iscolorspace", a.iscolorspace.value_or("") } };
     Json input = { { "wedge", a.wedge } };
     if (a.chart)  // only then: the hashes of earlier renders stay valid
         input["chart"] = true;
@@ -408,8 +408,8 @@ Status render_one(const RenderContext& ctx, const FrameJob& job, FrameOutcome& o
     OIIO::ImageBuf& result = cmd.output == OutputKind::density ? dst : transformed;
     OutputReport output_report;
     if (Status s = apply_output(
-            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace, ctx.regrain_curves,
-                            cmd.timing, ctx.adx_transform },
+            OutputRequest { cmd.output, a.colorconfig, a.ocolorspace.value_or(""),
+                            ctx.regrain_curves, cmd.timing, ctx.adx_transform },
             opts,
             src, dst, result, output_report);
         !s)

@@ -124,11 +124,11 @@ Status convert_to_scene_linear(const CliArgs& a, const std::string& input_path,
                                     : std::nullopt;
     const bool declared_generic = OIIO::Strutil::iequals(declared, "Linear");
     std::string declared_known;  // the config's name for `declared`, "" if unknown
-    if (xy && !a.has_iscolorspace && !declared.empty())
+    if (xy && !a.iscolorspace && !declared.empty())
         if (Status s = ocio::find_colorspace(a.colorconfig, declared, declared_known); !s)
             return s;
 
-    if (xy && !a.has_iscolorspace && (declared_known.empty() || declared_generic)) {
+    if (xy && !a.iscolorspace && (declared_known.empty() || declared_generic)) {
         const std::string why
             = declared.empty()   ? std::string("the file declares no colour space")
               : declared_generic ? "its oiio:ColorSpace '" + declared + "' names no primaries"
@@ -164,8 +164,8 @@ Status convert_to_scene_linear(const CliArgs& a, const std::string& input_path,
     }
 
     std::string reason;
-    if (a.has_iscolorspace) {
-        chosen = a.iscolorspace;
+    if (a.iscolorspace) {
+        chosen = *a.iscolorspace;
         reason = "--iscolorspace";
     } else if (!declared.empty()) {
         chosen = declared;
@@ -181,7 +181,7 @@ Status convert_to_scene_linear(const CliArgs& a, const std::string& input_path,
         std::unique_ptr<ocio::InputConverter> probe;
         if (Status c = ocio::InputConverter::create(a.colorconfig, "scene_linear", probe); !c)
             return c;
-        if (a.has_iscolorspace)
+        if (a.iscolorspace)
             return Status::errorf("--iscolorspace ", chosen, ": ", s.message());
         if (declared.empty())
             return s;
