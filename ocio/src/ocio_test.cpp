@@ -839,6 +839,26 @@ TEST_F(OcioTest, Ap0ChromaticitiesGiveRec709)
         EXPECT_NEAR(a[i], b[i], 1e-6) << "value " << i;
 }
 
+TEST_F(OcioTest, InputConverterNamesItsRoute)
+{
+    // A named source: as given, resolved, and scene_linear's colour space
+    // as the Converter's destination.
+    auto named = make("", "acescg");  // OCIO matches names case-insensitively
+    ASSERT_TRUE(named);
+    EXPECT_EQ(named->source_colorspace(), "acescg");
+    EXPECT_EQ(named->source_name(), "ACEScg");
+    EXPECT_EQ(named->scene_linear_colorspace(), "lin_rec709");
+    EXPECT_EQ(named->destination_name(), "lin_rec709");
+    EXPECT_EQ(named->via_colorspace(), "");
+    // From chromaticities: no source name, the ACES space it went through.
+    std::unique_ptr<InputConverter> xy;
+    ASSERT_TRUE(InputConverter::create_from_chromaticities("", k_ap0_xy, xy));
+    EXPECT_EQ(xy->source_colorspace(), "");
+    EXPECT_EQ(xy->source_name(), "");
+    EXPECT_EQ(xy->destination_name(), "lin_rec709");
+    EXPECT_EQ(xy->via_colorspace(), "ACES2065-1");
+}
+
 TEST_F(OcioTest, MadeUpChromaticitiesKeepWhiteAndTheirPrimaries)
 {
     auto conv = make_xy("", k_made_up_xy);
