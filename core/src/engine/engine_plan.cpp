@@ -313,6 +313,8 @@ SpreadLight spread_light(const PlanContext& c)
         if (c.stock.layers[l].spreads_light())
             spreading.push_back(l);
     std::atomic<bool> stop { false };
+    // The layers' halos share their transform where their kernels agree.
+    HaloTransforms halos;
     parallel_for(static_cast<int64_t>(spreading.size()), c.settings.nthreads, stop,
                  [&](int, int64_t i) {
         if (c.cancelled())
@@ -322,7 +324,7 @@ SpreadLight spread_light(const PlanContext& c)
         const Layer& layer = c.stock.layers[l];
         out.values[l]      = std::make_shared<const std::vector<float>>(spread_exposure(
             c.stock, layer, direct_exposure(c, l), c.input.frame_width(),
-            c.input.frame_height(), c.frame.input_pitch_um, c.spread_asked()));
+            c.input.frame_height(), c.frame.input_pitch_um, c.spread_asked(), &halos));
         out.seconds[l] = seconds_since(t0);
     });
     return out;

@@ -7,10 +7,16 @@
 #include <complex>
 #include <limits>
 #include <utility>
-#include <vector>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <new>
 #include <stdexcept>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include <fftw3.h>
 
@@ -616,27 +622,32 @@ SpreadMethod spread_method(SpreadMethod asked, bool halo)
 namespace {
 
 /// G * V by the separable, symmetric pixel weights `g` of one axis
-/// (w[-m] = w[m]), along rows then columns; beyond the frame the nearest
-/// edge value (clamp) or nothing (gate). Each output adds w[m] times the
-/// sum of its two values m away, m from the reach down to 0, a row at a
-/// time (so the compiler may vectorise across the row without reordering a
-/// sum). The rows convolved along x live in a ring of the 2 reach + 1 that
-/// a row of the output reads: the memory is the output's and a few rows'.
-std::vector<double> separable_convolution(const std::vector<double>& values, int64_t w,
-                                          int64_t h, const PixelKernel& g, FrameEdge edge)
+/// (w[-m] = w[m]), along rows then columns, handed out a row at a time:
+/// out_row(y, row) with row[x] = (G * V)(x, y), y from 0 up. value_at(x, y)
+/// reads V (x in [0, w), y in [0, h)); beyond the frame the nearest edge
+/// value (clamp) or nothing (gate). Each output adds w[m] times the sum of
+/// its two values m away, m from the reach down to 0, a row at a time (so
+/// the compiler may vectorise across the row without reordering a sum).
+/// The rows convolved along x live in a ring of the 2 reach + 1 that a row
+/// of the output reads, and row y of V is read before row y of the output
+/// is handed out and never after: a caller may write the output over V.
+/// The memory is a few rows'.
+template <class ValueAt, class OutRow>
+void separable_convolution(const ValueAt& value_at, int64_t w, int64_t h, const PixelKernel& g,
+                           FrameEdge edge, const OutRow& out_row)
 {
     const int64_t r = g.reach, taps = 2 * r + 1;
     const double* k = g.weights.data() + r;  // k[m] = w[m] = w[-m]
     std::vector<double> ring(static_cast<size_t>(taps * w));
     std::vector<double> line(static_cast<size_t>(w + 2 * r));
+    std::vector<double> o(static_cast<size_t>(w));
     const std::vector<double> zeros(static_cast<size_t>(w), 0.0);
     // Row yy of the frame convolved along x, into its ring slot.
     const auto convolve_row = [&](int64_t yy) {
-        const double* in = values.data() + yy * w;
         for (int64_t x = -r; x < w + r; ++x)
             line[static_cast<size_t>(x + r)]
-                = x >= 0 && x < w ? in[x]
-                  : edge == FrameEdge::clamp ? in[std::clamp<int64_t>(x, 0, w - 1)]
+                = x >= 0 && x < w ? value_at(x, yy)
+                  : edge == FrameEdge::clamp ? value_at(std::clamp<int64_t>(x, 0, w - 1), yy)
                                              : 0.0;
         double* out        = ring.data() + (yy % taps) * w;
         const double* mid  = line.data() + r;
@@ -660,12 +671,11 @@ std::vector<double> separable_convolution(const std::vector<double>& values, int
     };
     for (int64_t yy = 0; yy < std::min(h, r); ++yy)
         convolve_row(yy);
-    std::vector<double> out(values.size(), 0.0);
     for (int64_t y = 0; y < h; ++y) {
         // Rows up to y + r are in the ring (those below y - r left it).
         if (y + r < h)
             convolve_row(y + r);
-        double* o = out.data() + y * w;
+        std::fill(o.begin(), o.end(), 0.0);
         for (int64_t m = r; m > 0; --m) {
             const double km   = k[m];
             const double* up  = row(y - m);
@@ -676,18 +686,83 @@ std::vector<double> separable_convolution(const std::vector<double>& values, int
         const double* centre = row(y);
         for (int64_t x = 0; x < w; ++x)
             o[x] += k[0] * centre[x];
+        out_row(y, static_cast<const double*>(o.data()));
     }
-    return out;
 }
+
+/// A halation kernel's pixel weights as spread_frame transforms them, at
+/// one period: the real part of the kernel's transform (kw x ny, kw = nx /
+/// 2 + 1; the kernel is symmetric in both axes, so its transform is real
+/// and the imaginary part round-off), and the period, which the kernel's
+/// reach sets.
+struct HaloTransform {
+    int64_t nx = 0, ny = 0, pad = 0;
+    std::vector<double> real;
+};
+
+/// What makes a HaloTransform: the kernel (its kind, radius or base,
+/// cut), the pitch, and the frame and Gaussian reach that size the period.
+using HaloKey = std::tuple<int, double, double, double, int, double, int64_t, int64_t, int,
+                           int64_t, int64_t>;
 
 }  // namespace
 
-std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width,
-                                 int64_t frame_height, double pitch_um, double scatter,
-                                 double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge,
-                                 SpreadMethod method)
+struct HaloTransforms::Impl {
+    std::mutex mutex;
+    std::map<HaloKey, std::shared_future<std::shared_ptr<const HaloTransform>>> made;
+};
+
+HaloTransforms::HaloTransforms()
+    : m_impl(std::make_unique<Impl>())
 {
-    const int64_t w = frame_width, h = frame_height;
+}
+
+HaloTransforms::~HaloTransforms() = default;
+
+namespace {
+
+/// `key`'s transform from `halos`: made here by `make` if no caller has
+/// asked for it, else the one another caller made (waiting for it while it
+/// is being made).
+std::shared_ptr<const HaloTransform> halo_transform(
+    HaloTransforms::Impl& halos, const HaloKey& key,
+    const std::function<std::shared_ptr<const HaloTransform>()>& make)
+{
+    std::promise<std::shared_ptr<const HaloTransform>> promise;
+    std::shared_future<std::shared_ptr<const HaloTransform>> made;
+    {
+        std::lock_guard<std::mutex> lock(halos.mutex);
+        const auto it = halos.made.find(key);
+        if (it != halos.made.end()) {
+            made = it->second;
+        } else {
+            halos.made.emplace(key, promise.get_future().share());
+        }
+    }
+    if (made.valid())
+        return made.get();
+    try {
+        std::shared_ptr<const HaloTransform> t = make();
+        promise.set_value(t);
+        return t;
+    } catch (...) {
+        promise.set_exception(std::current_exception());
+        throw;
+    }
+}
+
+/// The spread light of spread_frame's result, a row at a time:
+/// part_row(y, s, part) with part[x] the light (x, y) receives from the
+/// spread ((G * V) scatter, and its halo), before its round-off is clamped
+/// at 0, y from 0 up, and s the scatter that leaves V: the result is
+/// spread_value(s, V, part). part is null where nothing spreads (direct,
+/// no scatter). value_at(x, y) reads V (x in [0, w), y in [0, h)); row y
+/// of V is read before row y is handed out and never after.
+template <class ValueAt, class PartRow>
+void spread_parts(const ValueAt& value_at, int64_t w, int64_t h, double pitch_um, double scatter,
+                  double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge,
+                  SpreadMethod method, HaloTransforms* shared, const PartRow& part_row)
+{
     const bool scattering = scatter > 0.0 && scatter_sigma_um > 0.0;
     const bool haloing    = halo.on();
     const bool base       = haloing && halo.kernel == HalationKernel::base;
@@ -717,44 +792,56 @@ std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width
                       "render a coarser input"
                     : ": lower scatter_sigma_um, halation_radius_um or inhibitor_diffusion_um, or "
                       "render a coarser input"));
-    PixelKernel g, k;
+    PixelKernel g;
     if (scattering)
         g = gaussian_pixel_kernel(scatter_sigma_um, pitch_um);
     if (spread_method(method, haloing) == SpreadMethod::direct) {
-        // The part that stays, plus the spread part s (G * V), as below.
-        if (!scattering)
-            return values;
-        const std::vector<double> blurred = separable_convolution(values, w, h, g, edge);
-        for (size_t i = 0; i < values.size(); ++i)
-            values[i] = (1.0 - s) * values[i] + std::max(0.0, s * blurred[i]);
-        return values;
+        // The spread part s (G * V).
+        if (!scattering) {
+            for (int64_t y = 0; y < h; ++y)
+                part_row(y, s, static_cast<const double*>(nullptr));
+            return;
+        }
+        std::vector<double> part(static_cast<size_t>(w));
+        separable_convolution(value_at, w, h, g, edge, [&](int64_t y, const double* blurred) {
+            for (int64_t x = 0; x < w; ++x)
+                part[static_cast<size_t>(x)] = s * blurred[x];
+            part_row(y, s, static_cast<const double*>(part.data()));
+        });
+        return;
     }
-    if (base)
-        k = base_halation_pixel_kernel(BaseHalation(halo.base_thickness_um,
-                                                    halo.base_refractive_index, halo.rear_face),
-                                       pitch_um,
-                                       crop ? std::max(w, h) - 1 + g.reach
-                                            : std::numeric_limits<int64_t>::max());
-    else if (haloing)
-        k = halation_pixel_kernel(halo.kernel, halo.radius_um, pitch_um);
     // A period of at least the frame plus the kernels' reach: the circular
     // convolution then wraps only zeros into the frame (gate). With the
     // scene continued beyond the frame (clamp, MODEL.md 2), the frame sits
     // `pad` = reach pixels in, the margin holding the nearest edge pixel's
     // value, and the period takes the margins on both sides: what the
     // kernels read around the frame is the margin, never a wrap.
-    const int64_t reach = g.reach + k.reach;
-    const int64_t pad   = edge == FrameEdge::clamp ? reach : 0;
-    const int64_t nx = fft_size_at_least(w + reach + pad), ny = fft_size_at_least(h + reach + pad);
-    const int64_t kw = nx / 2 + 1;  // frequencies of a row of the r2c transform
-
+    //
     // The halo's transform first: the kernel at its offsets modulo the
     // period, symmetric in both axes, so its transform is real (the
-    // imaginary part is round-off). Its real part is kept and its grid
-    // freed before the frame's grid is made: the two grids never coexist
-    // (a 4K frame's with a 2.5 mm halo is 160 MB).
-    std::vector<double> kernel_real;
-    if (haloing) {
+    // imaginary part is round-off). Its real part is kept (in `shared` for
+    // the next layer with the same kernel and period) and its grid freed
+    // before the frame's grid is made: the two grids never coexist (a 4K
+    // frame's with a 2.5 mm halo is 160 MB).
+    const int64_t max_reach
+        = crop ? std::max(w, h) - 1 + g.reach : std::numeric_limits<int64_t>::max();
+    const auto make = [&]() {
+        PixelKernel k;
+        if (base)
+            k = base_halation_pixel_kernel(BaseHalation(halo.base_thickness_um,
+                                                        halo.base_refractive_index,
+                                                        halo.rear_face),
+                                           pitch_um, max_reach);
+        else if (haloing)
+            k = halation_pixel_kernel(halo.kernel, halo.radius_um, pitch_um);
+        auto t            = std::make_shared<HaloTransform>();
+        const int64_t reach = g.reach + k.reach;
+        t->pad            = edge == FrameEdge::clamp ? reach : 0;
+        t->nx             = fft_size_at_least(w + reach + t->pad);
+        t->ny             = fft_size_at_least(h + reach + t->pad);
+        if (!haloing)
+            return std::shared_ptr<const HaloTransform>(std::move(t));
+        const int64_t nx = t->nx, ny = t->ny, kw = nx / 2 + 1;
         FftGrid kernel(nx, ny);
         const int64_t n = 2 * k.reach + 1;
         for (int64_t j = -k.reach; j <= k.reach; ++j)
@@ -763,26 +850,33 @@ std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width
                     = k.weights[static_cast<size_t>((j + k.reach) * n + (i + k.reach))];
         k = PixelKernel();  // its weights are in the grid now
         kernel.transform(true);
-        kernel_real.resize(static_cast<size_t>(kw * ny));
+        t->real.resize(static_cast<size_t>(kw * ny));
         for (int64_t ky = 0; ky < ny; ++ky) {
             const std::complex<double>* row = kernel.spectrum_row(ky);
             for (int64_t kx = 0; kx < kw; ++kx)
-                kernel_real[static_cast<size_t>(ky * kw + kx)] = row[kx].real();
+                t->real[static_cast<size_t>(ky * kw + kx)] = row[kx].real();
         }
+        return std::shared_ptr<const HaloTransform>(std::move(t));
+    };
+    std::shared_ptr<const HaloTransform> kt;
+    if (haloing) {
+        HaloTransforms own;
+        const HaloKey key { static_cast<int>(halo.kernel), halo.radius_um,
+                            halo.base_thickness_um, halo.base_refractive_index,
+                            static_cast<int>(halo.rear_face), pitch_um, max_reach, g.reach,
+                            static_cast<int>(edge), w, h };
+        kt = halo_transform((shared ? shared : &own)->impl(), key, make);
+    } else {
+        kt = make();
     }
+    const int64_t nx = kt->nx, ny = kt->ny, pad = kt->pad;
+    const int64_t kw = nx / 2 + 1;  // frequencies of a row of the r2c transform
 
     FftGrid v(nx, ny);
-    if (pad == 0) {
-        for (int64_t y = 0; y < h; ++y)
-            for (int64_t x = 0; x < w; ++x)
-                v.real(x, y) = values[static_cast<size_t>(y * w + x)];
-    } else {
-        for (int64_t y = -pad; y < h + pad; ++y)
-            for (int64_t x = -pad; x < w + pad; ++x)
-                v.real(x + pad, y + pad)
-                    = values[static_cast<size_t>(std::clamp<int64_t>(y, 0, h - 1) * w
-                                                 + std::clamp<int64_t>(x, 0, w - 1))];
-    }
+    for (int64_t y = -pad; y < h + pad; ++y)
+        for (int64_t x = -pad; x < w + pad; ++x)
+            v.real(x + pad, y + pad)
+                = value_at(std::clamp<int64_t>(x, 0, w - 1), std::clamp<int64_t>(y, 0, h - 1));
     v.transform(true);
 
     std::vector<double> gx, gy;
@@ -795,7 +889,7 @@ std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width
     const double scale = 1.0 / (static_cast<double>(nx) * static_cast<double>(ny));
     for (int64_t ky = 0; ky < ny; ++ky) {
         std::complex<double>* row = v.spectrum_row(ky);
-        const double* krow = haloing ? kernel_real.data() + ky * kw : nullptr;
+        const double* krow = haloing ? kt->real.data() + ky * kw : nullptr;
         for (int64_t kx = 0; kx < kw; ++kx) {
             const double gs = scattering ? (1.0 - s) + s * gx[static_cast<size_t>(kx)]
                                                            * gy[static_cast<size_t>(ky)]
@@ -804,34 +898,54 @@ std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width
             row[kx] *= (gs * hk - (1.0 - s)) * scale;
         }
     }
-    kernel_real = std::vector<double>();
+    kt.reset();
     v.transform(false);
-
-    // The part that stays, exactly, plus the spread part (its round-off
-    // clamped at 0: no negative light), in place of the values.
     for (int64_t y = 0; y < h; ++y)
-        for (int64_t x = 0; x < w; ++x) {
-            const size_t i = static_cast<size_t>(y * w + x);
-            values[i]      = (1.0 - s) * values[i] + std::max(0.0, v.real(x + pad, y + pad));
-        }
+        part_row(y, s, static_cast<const double*>(&v.real(pad, y + pad)));
+}
+
+/// The part that stays, exactly, plus the spread part (its round-off
+/// clamped at 0: no negative light).
+double spread_value(double s, double value, const double* part, int64_t x)
+{
+    return part ? (1.0 - s) * value + std::max(0.0, part[x]) : value;
+}
+
+}  // namespace
+
+std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width,
+                                 int64_t frame_height, double pitch_um, double scatter,
+                                 double scatter_sigma_um, const HalationSpec& halo, FrameEdge edge,
+                                 SpreadMethod method, HaloTransforms* shared)
+{
+    const int64_t w = frame_width;
+    double* v       = values.data();
+    const auto value_at = [v, w](int64_t x, int64_t y) { return v[y * w + x]; };
+    spread_parts(value_at, w, frame_height, pitch_um, scatter, scatter_sigma_um, halo, edge, method,
+                 shared, [&](int64_t y, double s, const double* part) {
+                     double* row = v + y * w;
+                     for (int64_t x = 0; x < w; ++x)
+                         row[x] = spread_value(s, row[x], part, x);
+                 });
     return values;
 }
 
 std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
                                    const LayerExposure& exposure, int64_t frame_width,
-                                   int64_t frame_height, double pitch_um, SpreadMethod method)
+                                   int64_t frame_height, double pitch_um, SpreadMethod method,
+                                   HaloTransforms* shared)
 {
-    std::vector<double> values(static_cast<size_t>(frame_width * frame_height));
-    for (int64_t y = 0; y < frame_height; ++y)
-        for (int64_t x = 0; x < frame_width; ++x)
-            values[static_cast<size_t>(y * frame_width + x)] = exposure.value(x, y);
-    const std::vector<double> spread
-        = spread_frame(std::move(values), frame_width, frame_height, pitch_um, layer.scatter,
-                       layer.scatter_sigma_um, layer_halation(stock, layer), exposure.edge(),
-                       method);
-    std::vector<float> out(spread.size());
-    for (size_t i = 0; i < spread.size(); ++i)
-        out[i] = static_cast<float>(std::min<double>(spread[i], std::numeric_limits<float>::max()));
+    std::vector<float> out(static_cast<size_t>(frame_width * frame_height));
+    const auto value_at = [&exposure](int64_t x, int64_t y) { return exposure.value(x, y); };
+    spread_parts(value_at, frame_width, frame_height, pitch_um, layer.scatter,
+                 layer.scatter_sigma_um, layer_halation(stock, layer), exposure.edge(), method,
+                 shared, [&](int64_t y, double s, const double* part) {
+                     float* row = out.data() + y * frame_width;
+                     for (int64_t x = 0; x < frame_width; ++x)
+                         row[x] = static_cast<float>(
+                             std::min<double>(spread_value(s, exposure.value(x, y), part, x),
+                                              std::numeric_limits<float>::max()));
+                 });
     return out;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "model/exposure.h"
@@ -158,6 +159,27 @@ enum class SpreadMethod { fft, direct };
 /// there is no halo.
 SpreadMethod spread_method(SpreadMethod asked, bool halo);
 
+/// The halation kernels' transforms spread_frame makes, kept for the next
+/// frame of the same size, pitch and edge with the same kernel (the
+/// stock's film base for the `base` kernel, the Gaussian's reach): the
+/// layers of a stock share their base, so a frame transforms it once, and
+/// the layers' frames never hold a copy each. Thread-safe: a layer asking
+/// for a transform another is making waits for it. Holds each transform
+/// until destroyed (a 4K frame's with a 2.5 mm halo: 80 MB).
+class HaloTransforms {
+public:
+    HaloTransforms();
+    ~HaloTransforms();
+    HaloTransforms(const HaloTransforms&)            = delete;
+    HaloTransforms& operator=(const HaloTransforms&) = delete;
+
+    struct Impl;
+    Impl& impl() { return *m_impl; }
+
+private:
+    std::unique_ptr<Impl> m_impl;
+};
+
 /// The exposure value of a layer after its scatter and halation
 /// (MODEL.md 9): H_s = (1 - scatter) H + scatter (G * H), then
 /// H' = H_s + halation (K * H_s), over the whole input frame
@@ -174,11 +196,14 @@ SpreadMethod spread_method(SpreadMethod asked, bool halo);
 /// Deterministic: a pure function of the layer (with the stock's film base
 /// for the `base` kernel), the exposure and the frame's size (one
 /// FFTW_ESTIMATE plan for a size, aligned buffers, one thread), never of
-/// the ROI or the thread count.
+/// the ROI or the thread count, nor of `shared` (where the halo's
+/// transform is taken from; null: made here). The exposure is read as it
+/// is needed: no copy of it is held.
 std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
                                    const LayerExposure& exposure, int64_t frame_width,
                                    int64_t frame_height, double pitch_um,
-                                   SpreadMethod method = SpreadMethod::fft);
+                                   SpreadMethod method = SpreadMethod::fft,
+                                   HaloTransforms* shared = nullptr);
 
 /// The convolution itself, on any frame of values (w x h, row by row;
 /// beyond the frame the nearest edge value (`edge` clamp) or 0 (gate)):
@@ -189,11 +214,13 @@ std::vector<float> spread_exposure(const Stock& stock, const Layer& layer,
 /// std::runtime_error (naming the keys to lower) when the frame plus the
 /// kernels' reach would need a transform of more than 2^28 values. The
 /// result takes the place of `values` (move them in: a frame is not held
-/// twice).
+/// twice; the direct convolution holds a few rows more, the transform its
+/// grid).
 std::vector<double> spread_frame(std::vector<double> values, int64_t frame_width,
                                  int64_t frame_height, double pitch_um, double scatter,
                                  double scatter_sigma_um, const HalationSpec& halation,
-                                 FrameEdge edge, SpreadMethod method = SpreadMethod::fft);
+                                 FrameEdge edge, SpreadMethod method = SpreadMethod::fft,
+                                 HaloTransforms* shared = nullptr);
 
 /// A transform length >= n with no prime factor above 7 (FFTW is fast on
 /// those).

@@ -10,6 +10,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -738,6 +739,76 @@ TEST(LightSpread, RendersAreBitIdenticalForThreadsTilesAndRois)
         EXPECT_EQ(window.y_begin, 0);
         EXPECT_EQ(window.x_end, 96);
         EXPECT_EQ(window.y_end, 96);
+    }
+}
+
+TEST(LightSpread, LayersSharingAHaloTransformGetTheImageOfTheirOwn)
+{
+    // Three layers of one stock on a bare 100 um base: R and G share the
+    // kernel and the period (the same Gaussian reach) with other strengths,
+    // B scatters wider (another period, by a few pixels of a halo's 280).
+    // Spread with one HaloTransforms for all, from two threads at once or
+    // in turn, each is bit for bit what it is with a transform of its own
+    // (in double: the far tail a wrong period moves is below float's
+    // rounding). spread_exposure's image is that spread_frame of its
+    // exposure values (which it held as a copy before it read the exposure
+    // in place), stored as float.
+    Stock stock;
+    stock.base_thickness_um = 100.0;
+    Layer r, g, b;
+    r.scatter = 0.3, r.scatter_sigma_um = 5.0, r.halation = 0.02;
+    g.scatter = 0.2, g.scatter_sigma_um = 5.0, g.halation = 0.004;
+    b.scatter = 0.3, b.scatter_sigma_um = 12.0, b.halation = 0.01;
+    for (Layer* l : { &r, &g, &b })
+        l->halation_kernel = HalationKernel::base;
+    const int64_t w = 96, h = 64;
+    const double pitch_um = 7.0;
+    // A ramp up to the edges (a period too short for a kernel's reach
+    // would wrap one edge's light onto the other) and a bright block.
+    auto img = block_image(w, h, 0.0f, 40, 20, 6, 30.0f);
+    for (int64_t y = 0; y < h; ++y)
+        for (int64_t x = 0; x < w; ++x)
+            img[static_cast<size_t>(y * w + x)] += 0.05f * static_cast<float>(1 + x + 2 * y);
+    const ImageView view { img.data(), w, h, 1 };
+    const std::vector<Layer> layers { r, g, b };
+    for (FrameEdge edge : { FrameEdge::clamp, FrameEdge::gate }) {
+        const LayerExposure exposure(view, { 1.0, 0.0, 0.0 }, pitch_um,
+                                     std::numeric_limits<double>::infinity(), edge);
+        std::vector<double> values(static_cast<size_t>(w * h));
+        for (int64_t y = 0; y < h; ++y)
+            for (int64_t x = 0; x < w; ++x)
+                values[static_cast<size_t>(y * w + x)] = exposure.value(x, y);
+        const auto frame = [&](const Layer& l, HaloTransforms* shared) {
+            return spread_frame(values, w, h, pitch_um, l.scatter, l.scatter_sigma_um,
+                                layer_halation(stock, l), edge, SpreadMethod::fft, shared);
+        };
+        std::vector<std::vector<double>> own, parallel(3), in_turn;
+        HaloTransforms together, one_by_one;
+        std::thread other([&] { parallel[1] = frame(g, &together); });
+        parallel[0] = frame(r, &together);
+        other.join();
+        parallel[2] = frame(b, &together);
+        for (const Layer& l : layers) {
+            own.push_back(frame(l, nullptr));
+            in_turn.push_back(frame(l, &one_by_one));
+            const std::vector<float> as_float(own.back().begin(), own.back().end());
+            EXPECT_EQ(spread_exposure(stock, l, exposure, w, h, pitch_um), as_float);
+        }
+        EXPECT_EQ(parallel, own);
+        EXPECT_EQ(in_turn, own);
+        EXPECT_NE(own[0], own[1]);  // the strengths differ, and so do the images
+        // The renderer's call: floats, two layers at once, one transform.
+        HaloTransforms layers_of_a_frame;
+        std::vector<float> g_shared;
+        std::thread second([&] {
+            g_shared = spread_exposure(stock, g, exposure, w, h, pitch_um, SpreadMethod::fft,
+                                       &layers_of_a_frame);
+        });
+        EXPECT_EQ(spread_exposure(stock, r, exposure, w, h, pitch_um, SpreadMethod::fft,
+                                  &layers_of_a_frame),
+                  spread_exposure(stock, r, exposure, w, h, pitch_um));
+        second.join();
+        EXPECT_EQ(g_shared, spread_exposure(stock, g, exposure, w, h, pitch_um));
     }
 }
 
