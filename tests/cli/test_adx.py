@@ -28,7 +28,7 @@ removed when the stocks meet it) and the target is not changed.
 
 import json
 import math
-import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -38,14 +38,16 @@ import pytest
 from conftest import FAST, Exr, write_image
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tools" / "look"))
+from published_curves import datasheet, published_cdd  # noqa: E402
+
 CONFIG = str(ROOT / "ocio" / "src" / "filmgrain_minimal.ocio")  # the embedded config's source
-DATASHEETS = ROOT / "stocks" / "datasheets"
 
 STOPS = np.linspace(-3.0, 3.0, 13)
 GREY = 6  # the 0-stop step
 SIDE, MARGIN, PITCH_MM = 40, 6, 0.048
-SHEETS = {"vision3-500t": "kodak-vision3-500t-5219.json",
-          "vision3-250d": "kodak-vision3-250d-5207.json"}
+# The built-in stocks whose datasheets carry Annex C's Status M -> APD map.
+SHEETS = ["vision3-500t", "vision3-250d"]
 
 
 def to_aces(adx16):
@@ -155,18 +157,14 @@ def test_published_curves_meet_the_targets(run, ramps, stock):
     the ramp), as on the fitted stocks above: what the fitted stocks read
     beyond these is their curves' departures from the published ones, not
     the encoding."""
-    sheet = json.loads((DATASHEETS / SHEETS[stock]).read_text())
+    sheet = datasheet(stock)[1]
     spec = json.loads(run("--print-stock", stock).stdout)
     m = np.array(spec["printing_density"]["status_m_to_apd"]["matrix"])
     assert m.tolist() == sheet["printing_density"]["status_m_to_apd"]["matrix"]
     gains = ramps[(stock, "off")][1].attr("filmgrain:adx_gains")
     k = np.array([float(part.split()[1]) for part in gains.split(", ")])
     log_h = math.log10(spec["exposure_at_grey_lxs"]) + STOPS * math.log10(2.0)
-    layers = {l["name"]: l for l in sheet["layers"]}
-    d = np.array([[np.interp(x, layers[c]["curve"]["log_h"], layers[c]["curve"]["density"])
-                   for c in "RGB"] for x in log_h])
-    d_min = np.array([layers[c]["d_min"] for c in "RGB"])
-    cdd = (d - d_min) @ m.T * k  # k (APD - APD_Dmin): the offset cancels
+    cdd = published_cdd(sheet, log_h, k)
     for timing in ("off", "grey"):
         c = cdd + (0.70 - cdd[GREY] if timing == "grey" else 0.0)
         rg, bg = log2_ratios(to_aces((1520.0 + 8000.0 * c) / 65535.0))

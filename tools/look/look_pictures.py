@@ -49,6 +49,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from published_curves import datasheet, published_cdd  # noqa: E402
+
 # The chart's layout (core/include/filmgrain/chart.h defaults): 6.25 um
 # pixels, a point light at (256, 256), the grey rectangle from x = 576.
 PITCH_UM = 6.25
@@ -88,12 +90,6 @@ def adx_view(code, colorspace):
     return np.round(255.0 * np.clip(out.get_pixels(oiio.FLOAT), 0.0, 1.0)).astype(np.uint8)
 
 
-# The published datasheet each fitted stock was fitted to (stocks/datasheets).
-SHEETS = {"vision3-500t": "kodak-vision3-500t-5219.json",
-          "vision3-250d": "kodak-vision3-250d-5207.json",
-          "vision3-200t": "kodak-vision3-200t-5213.json"}
-
-
 def display_of_cdd(cdd):
     """Timed CDD (n, 3) -> the preview's display code values, unrounded
     (ADX16 -> the config's view, x 255)."""
@@ -131,24 +127,18 @@ def wedge_neutrality(filmgrain, stock, spec, m, dmin, k, tmp):
                                          axis=0)) for i, _ in steps])
     from_means = display_of_cdd(k * ((mean_d - dmin) @ m.T) + offsets)
     published = None
-    if stock in SHEETS:
-        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-        with open(os.path.join(root, "stocks", "datasheets", SHEETS[stock])) as f:
-            sheet = json.load(f)
-        layers = {layer["name"]: layer for layer in sheet["layers"]}
-        sm = np.array(sheet["printing_density"]["status_m_to_apd"]["matrix"])
+    sheet = datasheet(stock)
+    if sheet is not None and "printing_density" in sheet[1]:
         log_h = np.log10(spec["exposure_at_grey_lxs"]) + np.array(
             [0.0] + [s for _, s in steps]) * np.log10(2.0)
-        dd = np.array([[np.interp(x, layers[c]["curve"]["log_h"], layers[c]["curve"]["density"])
-                        for c in "RGB"] for x in log_h])
-        cdd = k * ((dd - np.array([layers[c]["d_min"] for c in "RGB"])) @ sm.T)
+        cdd = published_cdd(sheet[1], log_h, k)
         published = display_of_cdd(cdd[1:] + (0.70 - cdd[0]))
     for j, (i, stops) in enumerate(steps):
         px = np.ptp(preview[:, i * 48:(i + 1) * 48].reshape(-1, 3).mean(axis=0))
         line = (f"wedge neutrality {stops:+.2f} stops: preview {px:.1f}; "
                 f"step means through the chain {np.ptp(from_means[j]):.1f}")
         if published is not None:
-            line += f"; published curves ({SHEETS[stock]}) {np.ptp(published[j]):.1f}"
+            line += f"; published curves ({sheet[0]}) {np.ptp(published[j]):.1f}"
         print(line)
 
 
