@@ -47,7 +47,7 @@ STOPS = np.linspace(-3.0, 3.0, 13)
 GREY = 6  # the 0-stop step
 SIDE, MARGIN, PITCH_MM = 40, 6, 0.048
 # The built-in stocks whose datasheets carry Annex C's Status M -> APD map.
-SHEETS = ["vision3-500t", "vision3-250d"]
+ADX_STOCKS = ["vision3-500t", "vision3-250d"]
 
 
 def to_aces(adx16):
@@ -72,7 +72,7 @@ def ramps(fg_bin, tmp_path_factory):
     src = write_image(tmp / "ramp.exr", img)
     width_mm = SIDE * len(STOPS) * PITCH_MM
     out = {}
-    for stock in SHEETS:
+    for stock in ADX_STOCKS:
         for timing in ("off", "grey"):
             exr = tmp / f"{stock}-{timing}.exr"
             r = subprocess.run(
@@ -93,7 +93,7 @@ def log2_ratios(aces):
     return np.log2(aces[:, 0] / aces[:, 1]), np.log2(aces[:, 2] / aces[:, 1])
 
 
-@pytest.mark.parametrize("stock", list(SHEETS))
+@pytest.mark.parametrize("stock", list(ADX_STOCKS))
 @pytest.mark.parametrize("timing", ["off", "grey"])
 def test_ramp_is_monotonic_per_channel(ramps, stock, timing):
     aces, exr = ramps[(stock, timing)]
@@ -118,7 +118,7 @@ def test_untimed_grey_is_near_neutral(ramps, stock, ratio, limit):
     assert abs(value) <= limit, f"{stock} log2({ratio}) at grey = {value:+.3f}"
 
 
-@pytest.mark.parametrize("stock", list(SHEETS))
+@pytest.mark.parametrize("stock", list(ADX_STOCKS))
 def test_timed_grey_is_018_in_every_channel(ramps, stock):
     aces, exr = ramps[(stock, "grey")]
     assert exr.attr("filmgrain:adx_timing").startswith("grey: R ")
@@ -146,7 +146,7 @@ def test_ratios_stay_within_a_quarter_stop_of_grey(ramps, stock, timing, ratio):
                                             zip(STOPS, r - r[GREY])))
 
 
-@pytest.mark.parametrize("stock", list(SHEETS))
+@pytest.mark.parametrize("stock", list(ADX_STOCKS))
 def test_published_curves_meet_the_targets(run, ramps, stock):
     """The same chain on the datasheet's own characteristic curves (Status M,
     digitised from Kodak's plates) instead of the fitted stock's: the stock
