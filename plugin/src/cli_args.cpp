@@ -483,7 +483,7 @@ Status validate_render_args(const CliArgs& a)
                               ": densities and ADX code values have no colour space to choose)");
     if (a.filmgrain.timing != AdxTiming::off && a.filmgrain.output != OutputKind::adx10
         && a.filmgrain.output != OutputKind::adx16)
-        return Status::errorf("timing=", adx_timing_name(a.filmgrain.timing),
+        return Status::errorf("timing=", name_of(a.filmgrain.timing),
                               " applies to output=adx10 and adx16 only (the output is ",
                               output_kind_name(a.filmgrain.output),
                               "; --preview is always timed on grey)");

@@ -159,16 +159,6 @@ Status check_outputs_spare_inputs(const CliArgs& a, const FrameJob& job)
     return {};
 }
 
-const char* frame_outcome_name(FrameOutcome outcome)
-{
-    switch (outcome) {
-    case FrameOutcome::rendered: return "rendered";
-    case FrameOutcome::up_to_date: return "up_to_date";
-    case FrameOutcome::missing: return "missing_input";
-    }
-    return "rendered";
-}
-
 std::string format_seconds(double s)
 {
     std::ostringstream out;
@@ -201,14 +191,14 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
                       { "seed", sc.seed },
                       { "frame", frame_json<Json>(sc.frame) },
                       { "static", sc.static_grain },
-                      { "edge", frame_edge_name(sc.edge) } };
-    j["engine"]   = { { "engine", engine_name(e.engine) },
+                      { "edge", name_of(sc.edge) } };
+    j["engine"]   = { { "engine", name_of(e.engine) },
                       { "tolerance", e.tolerance },
-                      { "kinetics", e.kinetics ? kinetics_method_name(*e.kinetics) : "" },
-                      { "photons", e.photons ? exposure_method_name(*e.photons) : "" },
-                      { "coverage", e.coverage ? coverage_method_name(*e.coverage) : "" },
-                      { "grains", e.grains ? grain_method_name(*e.grains) : "" },
-                      { "scale", e.scale ? scale_method_name(*e.scale) : "" },
+                      { "kinetics", e.kinetics ? name_of(*e.kinetics) : "" },
+                      { "photons", e.photons ? name_of(*e.photons) : "" },
+                      { "coverage", e.coverage ? name_of(*e.coverage) : "" },
+                      { "grains", e.grains ? name_of(*e.grains) : "" },
+                      { "scale", e.scale ? name_of(*e.scale) : "" },
                       { "samples", e.samples } };
     const FilmgrainCommand& cmd = a.filmgrain;
     j["scan"]     = { opts.scan_width, opts.scan_height };
@@ -222,7 +212,7 @@ std::string settings_hash(const RenderContext& ctx, const FilmgrainOptions& opts
     // without a preview keep their hashes.
     if (cmd.output == OutputKind::adx10 || cmd.output == OutputKind::adx16)
         j["output"]["adx"] = { { "encoding", "apd, k (1, 0.92, 0.95)" },
-                               { "timing", adx_timing_name(cmd.timing) } };
+                               { "timing", name_of(cmd.timing) } };
     if (!job.preview.empty())
         j["preview"] = "adx16 timed on grey";
     j["type"]     = a.output_type == OutputType::half16 ? "half" : "float";

@@ -61,7 +61,12 @@ bool up_to_date(const FrameJob& job, const std::string& hash);
 enum class FrameOutcome { rendered, up_to_date, missing };
 
 /// The outcome as --report-json names it: rendered, up_to_date, missing_input.
-const char* frame_outcome_name(FrameOutcome outcome);
+inline constexpr Named<FrameOutcome> kFrameOutcomeNames[] = {
+    { FrameOutcome::rendered, "rendered" },
+    { FrameOutcome::up_to_date, "up_to_date" },
+    { FrameOutcome::missing, "missing_input" }
+};
+constexpr const auto& names_of(FrameOutcome) { return kFrameOutcomeNames; }
 
 /// Renders one image (a single image, or one frame of a sequence) and
 /// writes its outputs all-or-nothing. Errors are returned; an interruption

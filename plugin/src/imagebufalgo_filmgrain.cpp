@@ -252,8 +252,8 @@ void set_metadata(OIIO::ImageSpec& spec, const FilmgrainOptions& opts)
     spec.attribute("filmgrain:exposure_stops", static_cast<float>(opts.scene.exposure_stops));
     spec.attribute("filmgrain:shutter_s", static_cast<float>(opts.scene.shutter_s));
     spec.attribute("filmgrain:width_mm", static_cast<float>(opts.scene.width_mm));
-    spec.attribute("filmgrain:edge", frame_edge_name(opts.scene.edge));
-    spec.attribute("filmgrain:engine", engine_name(opts.engine_options.engine));
+    spec.attribute("filmgrain:edge", name_of(opts.scene.edge));
+    spec.attribute("filmgrain:engine", name_of(opts.engine_options.engine));
     spec.attribute("filmgrain:version", version_string());
 }
 

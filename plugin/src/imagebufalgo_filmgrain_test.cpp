@@ -67,7 +67,7 @@ TEST(Operator, ChannelsWindowsAndMetadata)
     EXPECT_EQ(spec.get_float_attribute("filmgrain:exposure_stops", -1.f), 0.f);
     EXPECT_EQ(spec.get_float_attribute("filmgrain:shutter_s"),
               static_cast<float>(opts.scene.shutter_s));
-    EXPECT_EQ(spec.get_string_attribute("filmgrain:engine"), engine_name(opts.engine_options.engine));
+    EXPECT_EQ(spec.get_string_attribute("filmgrain:engine"), name_of(opts.engine_options.engine));
     EXPECT_EQ(spec.get_string_attribute("filmgrain:version"), version_string());
     ASSERT_EQ(stats.layers.size(), opts.stock.layers.size());
     EXPECT_EQ(stats.input.pixels_read, 16u * 12u);

@@ -146,7 +146,7 @@ int render(const CliArgs& a, const Console& con)
             std::cout << nlohmann::ordered_json {
                 { "frame", frame_json<nlohmann::ordered_json>(job.frame) },
                 { "output", job.output },
-                { "outcome", frame_outcome_name(outcome) },
+                { "outcome", name_of(outcome) },
                 { "seconds", seconds_since(t_frame) } }
                     .dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace)
                       << std::endl;

@@ -76,7 +76,7 @@ using DefaultFn = std::string (*)(const FilmgrainCommand& defaults);
 
 struct Modifier {
     const char* key;
-    const char* form;
+    std::string form;
     const char* help;
     DefaultFn show_default;
     ParseFn parse;
@@ -156,8 +156,8 @@ bool parse_static(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 
 bool parse_edge(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    if (!parse_frame_edge(std::string(v), cmd.scene.edge)) {
-        why = "must be clamp or gate";
+    if (!parse_name(v, cmd.scene.edge)) {
+        why = "must be " + names_in(kFrameEdgeNames, " or ");
         return false;
     }
     return true;
@@ -222,18 +222,10 @@ bool parse_roi(std::string_view v, FilmgrainCommand& cmd, std::string& why)
     return true;
 }
 
-std::string engine_list()
-{
-    std::string s;
-    for (const std::string& e : engine_names())
-        s += std::string(s.empty() ? "" : ", ") + e;
-    return s;
-}
-
 bool parse_engine_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    if (!parse_engine(std::string(v), cmd.engine_options.engine)) {
-        why = "unknown engine (known: " + engine_list() + ")";
+    if (!parse_name(v, cmd.engine_options.engine)) {
+        why = "unknown engine (known: " + names_in(kEngineNames, ", ") + ")";
         return false;
     }
     return true;
@@ -252,67 +244,44 @@ bool parse_tolerance(std::string_view v, FilmgrainCommand& cmd, std::string& why
     return true;
 }
 
-/// The `name|name|...` form of an enumeration, for --help and errors.
+/// An expert override `key=NAME`: one of the names in `table`
+/// (filmgrain/names.h).
 template<typename E, size_t N>
-std::string names_of(const E (&all)[N], const char* (*to_name)(E))
+bool parse_choice(std::string_view v, const Named<E> (&table)[N], const char* what,
+                  std::optional<E>& out, std::string& why)
 {
-    std::string s;
-    for (E e : all)
-        s += std::string(s.empty() ? "" : "|") + to_name(e);
-    return s;
-}
-
-constexpr KineticsMethod kKinetics[] = { KineticsMethod::chain, KineticsMethod::early_stop,
-                                        KineticsMethod::table, KineticsMethod::curve,
-                                        KineticsMethod::fog };
-constexpr ExposureMethod kExposureMethods[] = { ExposureMethod::disc, ExposureMethod::centre };
-constexpr CoverageMethod kCoverage[]
-    = { CoverageMethod::exact, CoverageMethod::scanline, CoverageMethod::raster };
-
-constexpr GrainMethod kGrains[] = { GrainMethod::exact, GrainMethod::fast };
-constexpr ScaleMethod kScales[] = { ScaleMethod::grain, ScaleMethod::pixel };
-
-/// An expert override `key=NAME`: one of `all`, by the name to_name gives.
-template<typename E, size_t N>
-bool parse_choice(std::string_view v, const E (&all)[N], const char* (*to_name)(E),
-                  const char* what, std::optional<E>& out, std::string& why)
-{
-    for (E e : all)
-        if (v == to_name(e)) {
-            out = e;
-            return true;
-        }
-    why = std::string("unknown ") + what + " (known: " + names_of(all, to_name) + ")";
+    E e {};
+    if (value_in(table, v, e)) {
+        out = e;
+        return true;
+    }
+    why = std::string("unknown ") + what + " (known: " + names_in(table, "|") + ")";
     return false;
 }
 
 bool parse_kinetics_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    return parse_choice(v, kKinetics, kinetics_method_name, "kinetics method",
-                        cmd.engine_options.kinetics, why);
+    return parse_choice(v, kKineticsNames, "kinetics method", cmd.engine_options.kinetics, why);
 }
 
 bool parse_photons_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    return parse_choice(v, kExposureMethods, exposure_method_name, "exposure sampling",
-                        cmd.engine_options.photons, why);
+    return parse_choice(v, kExposureNames, "exposure sampling", cmd.engine_options.photons, why);
 }
 
 bool parse_coverage_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    return parse_choice(v, kCoverage, coverage_method_name, "coverage method",
-                        cmd.engine_options.coverage, why);
+    return parse_choice(v, kCoverageNames, "coverage method", cmd.engine_options.coverage, why);
 }
 
 bool parse_grains_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    return parse_choice(v, kGrains, grain_method_name, "grain method", cmd.engine_options.grains,
-                        why);
+    return parse_choice(v, kGrainNames, "grain method", cmd.engine_options.grains, why);
 }
 
 bool parse_scale_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    return parse_choice(v, kScales, scale_method_name, "scale", cmd.engine_options.scale, why);
+    return parse_choice(v, kScaleNames, "scale", cmd.engine_options.scale, why);
 }
 
 bool parse_samples(std::string_view v, FilmgrainCommand& cmd, std::string& why)
@@ -335,8 +304,8 @@ bool parse_output_value(std::string_view v, FilmgrainCommand& cmd, std::string& 
 
 bool parse_timing_value(std::string_view v, FilmgrainCommand& cmd, std::string& why)
 {
-    if (!parse_adx_timing(v, cmd.timing)) {
-        why = "unknown timing (known: off, grey)";
+    if (!parse_name(v, cmd.timing)) {
+        why = "unknown timing (known: " + names_in(kAdxTimingNames, ", ") + ")";
         return false;
     }
     return true;
@@ -404,11 +373,11 @@ const Modifier kModifiers[] = {
     { "static_grain", "0|1", "1: the same grain on every frame (the seed as is, frame ignored)",
       [](const FilmgrainCommand& d) { return std::string(d.scene.static_grain ? "1" : "0"); },
       parse_static },
-    { "edge", "clamp|gate",
+    { "edge", names_in(kFrameEdgeNames, "|"),
       "beyond the input's data window (MODEL.md 2): clamp = the scene continues, each point "
       "exposed as the nearest edge pixel (a plate is a crop of the picture the lens made); "
       "gate = no light (a frame's hard edge inside a camera gate)",
-      [](const FilmgrainCommand& d) { return std::string(frame_edge_name(d.scene.edge)); },
+      [](const FilmgrainCommand& d) { return std::string(name_of(d.scene.edge)); },
       parse_edge },
     { "width_mm", "MM", "width of the film frame, millimetres, (0, 1e9]",
       [](const FilmgrainCommand& d) { return format_number(d.scene.width_mm); },
@@ -421,15 +390,15 @@ const Modifier kModifiers[] = {
       "inside the scan and its overscan: a plate's data window beyond its display window is "
       "rendered too, at negative coordinates and beyond the scan)",
       default_roi, parse_roi },
-    { "engine", "auto|exact|fast",
+    { "engine", names_in(kEngineNames, "|"),
       "simulation engine: exact is the reference (every photon, the latent-image chain until each "
       "grain is decided, exact coverage); "
       "auto runs the paths the scene needs within the tolerance; fast the fastest paths",
-      [](const FilmgrainCommand& d) { return std::string(engine_name(d.engine_options.engine)); },
+      [](const FilmgrainCommand& d) { return std::string(name_of(d.engine_options.engine)); },
       parse_engine_value },
     { "tolerance", "D", "density error budget of the approximate paths (auto), (0, 1]",
       [](const FilmgrainCommand& d) { return format_number(d.engine_options.tolerance); }, parse_tolerance },
-    { "kinetics", "chain|early|table|curve|fog",
+    { "kinetics", names_in(kKineticsNames, "|"),
       "expert override (not with engine=exact): chain = exact's: every photon, the chain until "
       "the grain's fate is decided; early = the same, but no photons for a grain fog decides; "
       "table = P(develop|N) tabulated per scene; curve = the fast per-grain kernel: "
@@ -441,24 +410,24 @@ const Modifier kModifiers[] = {
                                "(large frames), else early; fast: curve where light reaches");
       },
       parse_kinetics_value },
-    { "photons", "disc|centre",
+    { "photons", names_in(kExposureNames, "|"),
       "expert override: exposure integrated over each grain's disc, or sampled at its centre",
       [](const FilmgrainCommand&) { return engine_choice("disc; fast: centre"); },
       parse_photons_value },
-    { "coverage", "exact|scanline|raster",
+    { "coverage", names_in(kCoverageNames, "|"),
       "expert override: exact pixel coverage, chord unions on sub-scanlines, or a raster of 64 "
       "points across a pixel and `samples` rows down it",
       [](const FilmgrainCommand&) {
           return engine_choice("raster with kinetics=curve, else exact; fast: raster");
       },
       parse_coverage_value },
-    { "grains", "exact|fast",
+    { "grains", names_in(kGrainNames, "|"),
       "expert override: the reference's grain streams, or the fast kernel's (counter-based per "
       "cell, tabulated size quantiles: same distribution, other grains); grains=fast with "
       "kinetics=early runs the exact decisions on the kernel's grains (for measuring it)",
       [](const FilmgrainCommand&) { return engine_choice("fast with kinetics=curve, else exact"); },
       parse_grains_value },
-    { "scale", "grain|pixel",
+    { "scale", names_in(kScaleNames, "|"),
       "expert override: every grain simulated, or each pixel's transmittance drawn from the "
       "Boolean model's pixel statistics (for grains far below the pixel)",
       [](const FilmgrainCommand&) {
@@ -486,12 +455,12 @@ const Modifier kModifiers[] = {
       "plus the film's grain, in --ocolorspace (see Output below)",
       [](const FilmgrainCommand& d) { return std::string(output_kind_name(d.output)); },
       parse_output_value },
-    { "timing", "off|grey",
+    { "timing", names_in(kAdxTimingNames, "|"),
       "ADX's printer lights (output=adx10|adx16 only): off = the standard encoding, the "
       "stock's printing densities above D-min; grey = per-channel offsets that put the stock's "
       "own 18% grey card on CDD 0.70 (ADX16 7120, ACES 0.18) in every channel, as a lab times "
       "a negative (see Output below)",
-      [](const FilmgrainCommand& d) { return std::string(adx_timing_name(d.timing)); },
+      [](const FilmgrainCommand& d) { return std::string(name_of(d.timing)); },
       parse_timing_value },
 };
 

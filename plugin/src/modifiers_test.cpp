@@ -189,7 +189,7 @@ TEST(Modifiers, DocsCoverEveryModifierWithItsDefault)
     };
     EXPECT_EQ(default_of("stock"), default_preset_name());
     EXPECT_EQ(default_of("shutter_s"), "0.0208333 (1/48)");
-    EXPECT_EQ(default_of("engine"), engine_name(RenderSettings().engine));
+    EXPECT_EQ(default_of("engine"), name_of(RenderSettings().engine));
     EXPECT_EQ(default_of("tile"), std::to_string(RenderSettings().tile_size_px));
     EXPECT_EQ(default_of("static_grain"), "0");
     EXPECT_EQ(default_of("edge"), "clamp");

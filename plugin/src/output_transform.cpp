@@ -226,7 +226,7 @@ Status apply_output(const OutputRequest& req, const FilmgrainOptions& opts,
                                   output_kind_name(req.kind), ")");
         if (req.timing != AdxTiming::off && req.kind != OutputKind::adx10
             && req.kind != OutputKind::adx16)
-            return Status::errorf("timing=", adx_timing_name(req.timing),
+            return Status::errorf("timing=", name_of(req.timing),
                                   " applies to output=adx10 and adx16 only (the output is ",
                                   output_kind_name(req.kind), ")");
         OIIO::ImageBuf result;

@@ -188,14 +188,14 @@ TEST_P(DyeGranularity, MeasuredSigmaMatchesTheCloudModel)
     const auto [g, measured, predicted, sigma] = agreement(s);
     ASSERT_GT(g.positions, 1000);
     EXPECT_NEAR(measured, predicted, 3.0 * sigma)
-        << cloud_profile_name(profile) << ": D " << s.reading.layers[0].density
+        << name_of(profile) << ": D " << s.reading.layers[0].density
         << ", 0.434 sigma_T/T " << measured;
     // The patch's density is the model's (the exposure was chosen for net
     // D 1.0 from it): within 3 standard errors of the patch mean plus the
     // Monte Carlo error of the exposure search's cheap prediction (50 chain
     // runs: 2% of the density).
     EXPECT_NEAR(s.reading.layers[0].density, 1.0, 0.02 + 3.0 * s.reading.layers[0].density_se)
-        << cloud_profile_name(profile);
+        << name_of(profile);
 }
 
 // MODEL.md 10 on a uniform patch of dye clouds: self-inhibition 0.4 thins
@@ -226,7 +226,7 @@ TEST(DyeGranularity, SelfInhibitionThinsDevelopment)
 
 INSTANTIATE_TEST_SUITE_P(Profiles, DyeGranularity,
                          ::testing::Values(CloudProfile::disc, CloudProfile::gaussian),
-                         [](const auto& info) { return std::string(cloud_profile_name(info.param)); });
+                         [](const auto& info) { return std::string(name_of(info.param)); });
 
 }  // namespace
 }  // namespace filmgrain::sensitometry

@@ -2,7 +2,7 @@
 // extremes: grain diameters 0.01 to 100 um, grain densities 1e-6 to 50 per
 // um^2, exposures from black (-64 stops) to thousands of photons per grain,
 // shutters 1e-9 s to 1e6 s, development efficiency d -> 0 and d -> 1, the
-// max_density clamp reached. Every render engine that parse_engine knows is
+// max_density clamp reached. Every render engine that kEngineNames lists is
 // driven.
 //
 // Asserted: the render succeeds; every density is finite and within
@@ -29,16 +29,13 @@
 namespace filmgrain::stability {
 namespace {
 
-/// The render engines this build knows (parse_engine decides, so engines
-/// added to core are picked up by name here).
+/// The render engines this build knows (kEngineNames lists them, so
+/// engines added to core are picked up here).
 std::vector<Engine> render_engines()
 {
     std::vector<Engine> out;
-    for (const char* name : { "exact", "fast", "auto", "automatic" }) {
-        Engine e;
-        if (parse_engine(name, e) && std::find(out.begin(), out.end(), e) == out.end())
-            out.push_back(e);
-    }
+    for (const Named<Engine>& e : kEngineNames)
+        out.push_back(e.value);
     return out;
 }
 
@@ -169,7 +166,7 @@ void grain_size_and_density_grid(const std::vector<Engine>& engines)
                         if (!ok)
                             std::fprintf(stderr, "%s\n", ok.message());
                         return static_cast<bool>(ok);
-                    })) << engine_name(engine) << ": diameter " << diameter_um << " um, "
+                    })) << name_of(engine) << ": diameter " << diameter_um << " um, "
                         << grains_per_um2 << " per um^2, ~" << photons << " photons, frame "
                         << frame_um << " um, scan " << scan_px;
                 }
@@ -208,7 +205,7 @@ TEST(StabilityRender, ScanPixelsFarLargerThanGrains)
                 if (!ok)
                     std::fprintf(stderr, "%s\n", ok.message());
                 return static_cast<bool>(ok);
-            })) << engine_name(engine) << ": diameter " << c.diameter_um << " um, "
+            })) << name_of(engine) << ": diameter " << c.diameter_um << " um, "
                 << c.grains_per_um2 << " per um^2, frame " << c.frame_um << " um, 8x8 scan";
         }
 }
@@ -222,7 +219,7 @@ TEST(StabilityRender, ShutterExtremes)
         for (double shutter_s : { 1e-9, 1e-3, 1e6 }) {
             const Outcome o = render_uniform(stock, engine, stops_for_photons(stock, 300.0),
                                              100.0, 16, shutter_s);
-            EXPECT_TRUE(sane(o, stock)) << engine_name(engine) << " shutter " << shutter_s;
+            EXPECT_TRUE(sane(o, stock)) << name_of(engine) << " shutter " << shutter_s;
         }
 }
 
@@ -241,7 +238,7 @@ TEST(StabilityRender, NoLightGivesFogOnly)
         ASSERT_GT(g, 1000.0);
         EXPECT_EQ(l.absorbed_photons, 0u);
         EXPECT_NEAR(l.developed / g, f, kSigmas * std::sqrt(f * (1 - f) / g) + 1.0 / g)
-            << engine_name(engine);
+            << name_of(engine);
     }
 }
 
@@ -260,7 +257,7 @@ TEST(StabilityRender, NoDevelopmentGivesBaseDensity)
             ASSERT_TRUE(sane(o, stock));
             EXPECT_EQ(o.stats.layers[0].developed, 0u);
             for (float d : o.density)
-                ASSERT_EQ(d, 0.25f) << engine_name(engine);
+                ASSERT_EQ(d, 0.25f) << name_of(engine);
         }
 }
 
@@ -283,7 +280,7 @@ TEST(StabilityRender, FullDevelopmentReachesTheClamp)
             EXPECT_EQ(o.stats.layers[0].developed, o.stats.layers[0].grains);
             for (float d : o.density)
                 ASSERT_EQ(d, static_cast<float>(0.1 + max_density))
-                    << engine_name(engine) << " max_density " << max_density;
+                    << name_of(engine) << " max_density " << max_density;
         }
     }
 }
@@ -336,7 +333,7 @@ TEST(StabilityRender, DensityRisesWithExposure)
                     const double noise
                         = kSigmas * std::sqrt(p * (1 - p) / g + prev_p * (1 - prev_p) / prev_g)
                           + 1.0 / g + 1.0 / prev_g;
-                    EXPECT_GE(p, prev_p - noise) << engine_name(engine) << " d " << diameter_um
+                    EXPECT_GE(p, prev_p - noise) << name_of(engine) << " d " << diameter_um
                                                  << " stops " << stops;
                 }
                 prev_p = p;
@@ -398,7 +395,7 @@ TEST(StabilityRender, HugeExposureSaturatesAndFinishes)
                              c.value, c.stops, static_cast<unsigned long long>(l.developed),
                              static_cast<unsigned long long>(l.grains));
                 return l.grains > 0 && l.developed * 10 >= l.grains * 9;
-            })) << engine_name(engine) << " value " << c.value << " stops " << c.stops;
+            })) << name_of(engine) << " value " << c.value << " stops " << c.stops;
         }
 }
 
@@ -472,7 +469,7 @@ TEST(StabilityRender, LookExtremes)
             EXPECT_TRUE(finishes_within(60.0, [&] {
                 const Outcome o = render_uniform(stock, engine, grey, 200.0, 32);
                 if (const auto ok = sane(o, stock); !ok) {
-                    std::fprintf(stderr, "%s, %s: %s\n", c.what, engine_name(engine),
+                    std::fprintf(stderr, "%s, %s: %s\n", c.what, name_of(engine),
                                  ok.message());
                     return false;
                 }
@@ -487,14 +484,14 @@ TEST(StabilityRender, LookExtremes)
                 const Outcome f = render_uniform(free, engine, grey, 200.0, 32);
                 if (!f.status || o.stats.layers[0].developed * 2 >= f.stats.layers[0].developed) {
                     std::fprintf(stderr, "%s, %s: %llu developed inhibited, %llu without\n",
-                                 c.what, engine_name(engine),
+                                 c.what, name_of(engine),
                                  static_cast<unsigned long long>(o.stats.layers[0].developed),
                                  static_cast<unsigned long long>(
                                      f.status ? f.stats.layers[0].developed : 0));
                     return false;
                 }
                 return true;
-            })) << c.what << " " << engine_name(engine);
+            })) << c.what << " " << name_of(engine);
         }
     }
 }

@@ -112,7 +112,7 @@ bool render_case(const Case& c)
             return false;
         }
         std::fprintf(stderr, "%s %s %s scan %lld: simulated in %.2f s\n", c.stock.c_str(),
-                     plate_name(c.plate), engine_name(c.engine), static_cast<long long>(scan),
+                     plate_name(c.plate), name_of(c.engine), static_cast<long long>(scan),
                      stats.simulate_seconds);
         for (size_t i = 0; i < density.size(); ++i)
             if (!std::isfinite(density[i])
@@ -153,7 +153,7 @@ TEST_P(UnlitPlate, RendersInTimeWithTheFogsDensity)
 {
     const Case c = GetParam();
     EXPECT_TRUE(finishes_within(kDeadlineSeconds, [&] { return render_case(c); }))
-        << c.stock << " " << plate_name(c.plate) << " " << engine_name(c.engine);
+        << c.stock << " " << plate_name(c.plate) << " " << name_of(c.engine);
 }
 
 std::vector<Case> all_cases()
@@ -170,7 +170,7 @@ std::vector<Case> all_cases()
 std::string case_name(const ::testing::TestParamInfo<Case>& info)
 {
     std::string name = info.param.stock + "_" + plate_name(info.param.plate) + "_"
-                       + engine_name(info.param.engine);
+                       + name_of(info.param.engine);
     for (char& ch : name)
         if (!std::isalnum(static_cast<unsigned char>(ch)))
             ch = '_';

@@ -113,7 +113,7 @@ TEST(FrameEdge, PaperHasNoRimWhenTheSceneContinues)
                 const std::vector<double> z
                     = rim_z(stock, engine, FrameEdge::clamp, stops, seed, 320, 240, 6.0);
                 EXPECT_LE(std::fabs(z[0]), 4.0)
-                    << engine_name(engine) << " " << stops << " stops, seed " << seed;
+                    << name_of(engine) << " " << stops << " stops, seed " << seed;
             }
     // Two seeds' z combined (independent: their sum over sqrt(2)); measured
     // 5.0 for one seed.
@@ -150,7 +150,7 @@ TEST(FrameEdge, Vision3HasNoRimFromLightSpreadOrInhibition)
                         = rim_z(*s, engine, FrameEdge::clamp, stops, seed, 192, 128, 6.0);
                     for (size_t l = 0; l < z.size(); ++l)
                         EXPECT_LE(std::fabs(z[l]), 4.0)
-                            << (s == &stock ? "" : "inhibited, ") << engine_name(engine) << " "
+                            << (s == &stock ? "" : "inhibited, ") << name_of(engine) << " "
                             << stops << " stops, seed " << seed << ", layer "
                             << stock.layers[l].name;
                 }

@@ -78,7 +78,7 @@ struct Case {
 void PrintTo(const Case& c, std::ostream* os)
 {
     *os << "shutter " << c.shutter_s << " s, " << c.stops << " stops, engine "
-        << engine_name(c.engine) << (c.table ? " kinetics=table" : "");
+        << name_of(c.engine) << (c.table ? " kinetics=table" : "");
 }
 
 class UniformPatch : public ::testing::TestWithParam<Case> {};
@@ -161,7 +161,7 @@ INSTANTIATE_TEST_SUITE_P(Shutters, UniformPatch,
                              return (s < 1e-3 ? std::string("Shutter1us")
                                      : s < 1  ? std::string("Shutter10ms")
                                               : std::string("Shutter100s"))
-                                    + "_" + engine_name(info.param.engine)
+                                    + "_" + name_of(info.param.engine)
                                     + (info.param.table ? "_table" : "");
                          });
 

@@ -89,8 +89,8 @@ void usage(std::ostream& os)
           "                     white; with --start, the start stock's own)\n"
           "  --cloud-profile disc|gaussian  dye clouds' profile\n"
           "                     "
-       << by_kind(std::string(filmgrain::cloud_profile_name(b.options.cloud_profile)),
-                  std::string(filmgrain::cloud_profile_name(c.options.cloud_profile)))
+       << by_kind(std::string(filmgrain::name_of(b.options.cloud_profile)),
+                  std::string(filmgrain::name_of(c.options.cloud_profile)))
        << "\n"
           "  --start-cloud-ratio X  dye clouds of the physical guess, in grain\n"
           "                     diameters, 0.5 to 2: its grains are Siedentopf's\n"

@@ -118,7 +118,7 @@ class Tool {
 public:
     explicit Tool(const Options& o) : m_opt(o)
     {
-        filmgrain::parse_engine(o.engine, m_settings.engine);
+        filmgrain::parse_name(o.engine, m_settings.engine);
         m_settings.nthreads = o.nthreads;
     }
 
@@ -133,7 +133,7 @@ public:
             if (m_results.is_discarded() || !m_results.is_object())
                 m_results = json::object();
         }
-        m_results["engine"] = filmgrain::engine_name(m_settings.engine);
+        m_results["engine"] = filmgrain::name_of(m_settings.engine);
         m_results["seed"]   = m_opt.seed;
         for (const std::string& name : kSections) {
             if (!m_opt.sections.count(name))
@@ -311,7 +311,7 @@ private:
             json& j = m_results["reciprocity"][name];
             for (const auto& [t, p] : found) {
                 const double stops = (p.log10_h - h_ref) / std::log10(2.0);
-                csv.row(filmgrain::engine_name(m_settings.engine), name, target, t, p.log10_h,
+                csv.row(filmgrain::name_of(m_settings.engine), name, target, t, p.log10_h,
                         p.log10_h_se, stops, p.patches);
                 j["points"].push_back({ { "shutter_s", t }, { "log10_h", p.log10_h },
                                         { "log10_h_se", p.log10_h_se }, { "stops_vs_10ms", stops } });
@@ -507,7 +507,7 @@ private:
                    { "patch_area_um2", std::pow(c.patch.side_px * c.patch.pitch_um, 2) },
                    { "pitch_um", c.patch.pitch_um } };
         if (csv)
-            csv->row(filmgrain::engine_name(m_settings.engine), label, r.name, aperture_um,
+            csv->row(filmgrain::name_of(m_settings.engine), label, r.name, aperture_um,
                      g.aperture_area_um2, c.log10_h, r.density, r.density_se,
                      c.model.net_density() + stock.layer_base_density(layer), g.mean_density,
                      g.sigma_density, g.sigma_density_se, j["sigma_d_delta"].get<double>(),
@@ -698,7 +698,7 @@ int main(int argc, char** argv)
         } else if (a == "--engine") {
             o.engine = value();
             filmgrain::Engine e;
-            if (!filmgrain::parse_engine(o.engine, e)) {
+            if (!filmgrain::parse_name(o.engine, e)) {
                 std::cerr << "filmgrain-sensitometry: unknown engine '" << o.engine << "'\n";
                 return 2;
             }

@@ -119,7 +119,7 @@ Status expose_patch(const Stock& stock, const PatchSpec& spec, const MeasureSett
         return s;
     out         = PatchReading {};
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    out.engine  = stats.engine.empty() ? engine_name(settings.engine) : stats.engine;
+    out.engine  = stats.engine.empty() ? name_of(settings.engine) : stats.engine;
     out.side_px = side_px;
     out.pitch_um = pitch_um;
     if (transmittance)

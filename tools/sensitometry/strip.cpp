@@ -64,7 +64,7 @@ Status expose_strip(const Stock& stock, const StripSpec& spec, const MeasureSett
                               "] step ", spec.log10_h_step, ": need max >= min, step > 0");
     out            = Curve {};
     out.shutter_s  = spec.shutter_s;
-    out.engine     = engine_name(settings.engine);
+    out.engine     = name_of(settings.engine);
     out.layers.resize(stock.layers.size());
     // Base + fog: an unexposed patch (no photons: cheap, so large).
     PatchSpec fog = plan_patch(stock, 0.0, spec.shutter_s, spec.budget, patch_seed(spec.seed, 0));

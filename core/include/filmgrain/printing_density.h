@@ -74,11 +74,9 @@ inline double adx_code_value(const AdxEncoding& enc, double cdd)
 /// per-channel offsets that put the stock's own 18% grey on CDD 0.70.
 enum class AdxTiming { off, grey };
 
-/// "off" or "grey".
-const char* adx_timing_name(AdxTiming timing);
-
-/// Reads "off" or "grey"; false for anything else (out unchanged).
-bool parse_adx_timing(std::string_view name, AdxTiming& out);
+inline constexpr Named<AdxTiming> kAdxTimingNames[] = { { AdxTiming::off, "off" },
+                                                       { AdxTiming::grey, "grey" } };
+constexpr const auto& names_of(AdxTiming) { return kAdxTimingNames; }
 
 /// The layers that give R, G and B: the layers named R, G and B, or layer
 /// 0 three times for a one-layer stock. Other stocks: an error naming the

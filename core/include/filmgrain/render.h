@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "filmgrain/image.h"
+#include "filmgrain/names.h"
 #include "filmgrain/status.h"
 #include "filmgrain/stock.h"
 
@@ -33,8 +34,9 @@ enum class FrameEdge {
     gate,   ///< no light beyond the input: the hard edge of a frame exposed
             ///< inside a camera gate
 };
-const char* frame_edge_name(FrameEdge edge);
-bool parse_frame_edge(const std::string& name, FrameEdge& out);
+inline constexpr Named<FrameEdge> kFrameEdgeNames[] = { { FrameEdge::clamp, "clamp" },
+                                                       { FrameEdge::gate, "gate" } };
+constexpr const auto& names_of(FrameEdge) { return kFrameEdgeNames; }
 
 /// The shot: how the scene is exposed onto the film (MODEL.md 1-2).
 struct SceneSettings {
@@ -142,22 +144,34 @@ enum class ScaleMethod {
             ///< measured in docs/performance)
 };
 
-/// Names as used on the command line, in metadata and statistics.
-const char* engine_name(Engine engine);
-const char* scale_method_name(ScaleMethod method);
-bool parse_scale_method(const std::string& name, ScaleMethod& out);
-const char* grain_method_name(GrainMethod method);
-bool parse_grain_method(const std::string& name, GrainMethod& out);
-const char* kinetics_method_name(KineticsMethod method);
-const char* exposure_method_name(ExposureMethod method);
-const char* coverage_method_name(CoverageMethod method);
-/// All engine names, the default first.
-std::vector<std::string> engine_names();
-/// Parse a name; false if unknown.
-bool parse_engine(const std::string& name, Engine& out);
-bool parse_kinetics_method(const std::string& name, KineticsMethod& out);
-bool parse_exposure_method(const std::string& name, ExposureMethod& out);
-bool parse_coverage_method(const std::string& name, CoverageMethod& out);
+/// Names as used on the command line, in metadata and statistics
+/// (filmgrain/names.h reads them both ways); the default engine first.
+inline constexpr Named<Engine> kEngineNames[] = { { Engine::automatic, "auto" },
+                                                  { Engine::exact, "exact" },
+                                                  { Engine::fast, "fast" } };
+inline constexpr Named<KineticsMethod> kKineticsNames[] = {
+    { KineticsMethod::chain, "chain" }, { KineticsMethod::early_stop, "early" },
+    { KineticsMethod::table, "table" }, { KineticsMethod::curve, "curve" },
+    { KineticsMethod::fog, "fog" }
+};
+inline constexpr Named<ExposureMethod> kExposureNames[] = { { ExposureMethod::disc, "disc" },
+                                                            { ExposureMethod::centre, "centre" } };
+inline constexpr Named<CoverageMethod> kCoverageNames[] = { { CoverageMethod::exact, "exact" },
+                                                            { CoverageMethod::scanline,
+                                                              "scanline" },
+                                                            { CoverageMethod::raster,
+                                                              "raster" } };
+inline constexpr Named<GrainMethod> kGrainNames[] = { { GrainMethod::exact, "exact" },
+                                                      { GrainMethod::fast, "fast" } };
+inline constexpr Named<ScaleMethod> kScaleNames[] = { { ScaleMethod::grain, "grain" },
+                                                      { ScaleMethod::pixel, "pixel" } };
+
+constexpr const auto& names_of(Engine) { return kEngineNames; }
+constexpr const auto& names_of(KineticsMethod) { return kKineticsNames; }
+constexpr const auto& names_of(ExposureMethod) { return kExposureNames; }
+constexpr const auto& names_of(CoverageMethod) { return kCoverageNames; }
+constexpr const auto& names_of(GrainMethod) { return kGrainNames; }
+constexpr const auto& names_of(ScaleMethod) { return kScaleNames; }
 
 /// Reports progress in [0, 1]; return false to cancel the render. Called
 /// from the thread that called render_negative, at most ~10 times a second.

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "filmgrain/names.h"
 #include "filmgrain/status.h"
 
 namespace filmgrain {
@@ -57,7 +58,11 @@ enum class HalationKernel { disc, ring, base };
 /// Inner radius of the `ring` halation kernel, as a fraction of its radius.
 inline constexpr double kRingInnerFraction = 0.75;
 
-const char* halation_kernel_name(HalationKernel kernel);
+inline constexpr Named<HalationKernel> kHalationKernelNames[] = {
+    { HalationKernel::disc, "disc" }, { HalationKernel::ring, "ring" },
+    { HalationKernel::base, "base" }
+};
+constexpr const auto& names_of(HalationKernel) { return kHalationKernelNames; }
 
 /// What lies behind the film base's rear face (docs/model.md, "Halation
 /// from the base"): `remjet`, an absorbing backing in optical contact with
@@ -66,7 +71,9 @@ const char* halation_kernel_name(HalationKernel kernel);
 /// reflection below the critical angle, total internal reflection above).
 enum class RearFace { remjet, bare };
 
-const char* rear_face_name(RearFace face);
+inline constexpr Named<RearFace> kRearFaceNames[] = { { RearFace::remjet, "remjet" },
+                                                     { RearFace::bare, "bare" } };
+constexpr const auto& names_of(RearFace) { return kRearFaceNames; }
 
 /// What a layer's developed grains leave (MODEL.md 8): opaque silver discs
 /// (section 5), or clouds of dye whose densities add.
@@ -75,8 +82,13 @@ enum class LayerImage { silver, dye };
 /// `gaussian`, density exp(-2 (distance / radius)^2) of its peak.
 enum class CloudProfile { disc, gaussian };
 
-const char* layer_image_name(LayerImage image);
-const char* cloud_profile_name(CloudProfile profile);
+inline constexpr Named<LayerImage> kLayerImageNames[] = { { LayerImage::silver, "silver" },
+                                                         { LayerImage::dye, "dye" } };
+inline constexpr Named<CloudProfile> kCloudProfileNames[] = { { CloudProfile::disc, "disc" },
+                                                             { CloudProfile::gaussian,
+                                                               "gaussian" } };
+constexpr const auto& names_of(LayerImage) { return kLayerImageNames; }
+constexpr const auto& names_of(CloudProfile) { return kCloudProfileNames; }
 
 /// One emulsion layer: an output channel.
 struct Layer {

@@ -24,11 +24,11 @@ void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
         path << (direct ? "spread=direct " : "spread=fft ");
         why << "exposure spread (MODEL.md 9: scatter " << format_g(layer.scatter) << " sigma "
             << format_g(layer.scatter_sigma_um) << " um, halation " << format_g(layer.halation)
-            << " " << halation_kernel_name(layer.halation_kernel);
+            << " " << name_of(layer.halation_kernel);
         if (layer.halation_kernel == HalationKernel::base)
             why << " (a " << format_g(c.stock.base_thickness_um) << " um base of index "
                 << format_g(c.stock.base_refractive_index) << ", rear face "
-                << rear_face_name(c.stock.rear_face) << ", reach "
+                << name_of(c.stock.rear_face) << ", reach "
                 << format_g(layer_halation(c.stock, layer).reach_um()) << " um)";
         else
             why << " radius " << format_g(layer.halation_radius_um) << " um";
@@ -48,7 +48,7 @@ void describe_layer_image(const PlanContext& c, size_t l, const LayerPlan& plan,
         // MODEL.md 8: per grain, the mean of 10^-D over each pixel; at
         // pixel scale, the clouds' blocking area and overlap.
         path << "image=dye";
-        why << "dye clouds (MODEL.md 8: " << cloud_profile_name(layer.cloud_profile)
+        why << "dye clouds (MODEL.md 8: " << name_of(layer.cloud_profile)
             << ", diameter ratio " << format_g(layer.cloud_diameter_ratio) << ", density "
             << format_g(layer.cloud_density) << "): ";
         std::string limited;  // docs/model.md: coupler-limited populations
@@ -83,7 +83,7 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
 {
     path << "kinetics=";
     for (size_t p = 0; p < plan.populations.size(); ++p)
-        path << (p ? "," : "") << kinetics_method_name(plan.populations[p].kinetics);
+        path << (p ? "," : "") << name_of(plan.populations[p].kinetics);
     const ExposureMethod exposure = plan.populations.front().exposure;
     const bool mixed = std::any_of(plan.populations.begin(), plan.populations.end(),
                                    [&](const PopulationPlan& pp) { return pp.exposure != exposure; });
@@ -93,12 +93,12 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
         path << " photons=";  // the modifier that chooses it
         if (mixed)  // per population, as kinetics
             for (size_t p = 0; p < plan.populations.size(); ++p)
-                path << (p ? "," : "") << exposure_method_name(plan.populations[p].exposure);
+                path << (p ? "," : "") << name_of(plan.populations[p].exposure);
         else
-            path << exposure_method_name(exposure);
+            path << name_of(exposure);
     }
     if (plan.dye_samples == 0)  // a dye layer's image is above, not a coverage
-        path << " coverage=" << coverage_method_name(plan.coverage);
+        path << " coverage=" << name_of(plan.coverage);
     if (plan.dye_samples == 0
         && (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster))
         path << " samples=" << plan.coverage_samples;

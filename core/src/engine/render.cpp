@@ -255,7 +255,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
 
         if (stats) {
             renderer.fill_stats(*stats);
-            stats->engine = engine_name(settings.engine);
+            stats->engine = name_of(settings.engine);
             std::vector<LayerExposure> direct;
             for (size_t l = 0; l < stock.layers.size(); ++l)
                 direct.emplace_back(input, stock.layers[l].sensitivity, frame.input_pitch_um,

@@ -354,9 +354,9 @@ TEST(Render, InfiniteAndHugeValuesSaturate)
             // Saturated: the density clamp's neighbourhood, far above grey
             // (the colour preset's grey is ~0.8 above base, its shoulder
             // ~2.5: 0.5 is many times the noise of a 16-pixel mean).
-            EXPECT_GT(block_mean(d, 4, l), grey + 0.5) << engine_name(engine) << " " << l;
-            EXPECT_GT(block_mean(d, 20, l), grey + 0.5) << engine_name(engine) << " " << l;
-            EXPECT_LT(block_mean(d, 36, l), grey - 0.3) << engine_name(engine) << " " << l;
+            EXPECT_GT(block_mean(d, 4, l), grey + 0.5) << name_of(engine) << " " << l;
+            EXPECT_GT(block_mean(d, 20, l), grey + 0.5) << name_of(engine) << " " << l;
+            EXPECT_LT(block_mean(d, 36, l), grey - 0.3) << name_of(engine) << " " << l;
         }
     }
 }
@@ -395,7 +395,7 @@ TEST(Render, ZeroExposureDevelopsFogOnly)
             double mean = 0.0;
             for (const Population& pop : s.stock.layers[l].populations)
                 mean += f * pop.grains_per_um2 * area_um2;
-            EXPECT_NEAR(n, mean, 5 * std::sqrt(mean)) << engine_name(engine);
+            EXPECT_NEAR(n, mean, 5 * std::sqrt(mean)) << name_of(engine);
         }
     }
     // The fog path's grains are a pure function of their cells: threads,

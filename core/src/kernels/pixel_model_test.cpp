@@ -209,7 +209,7 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
         for (double v : { 0.4, 1.0 }) {
             const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, image);
             const Sample s = monte_carlo(pops[0], v, &layer);
-            const std::string what = std::string(cloud_profile_name(profile)) + " v "
+            const std::string what = std::string(name_of(profile)) + " v "
                                      + std::to_string(v);
             expect_moments(s, m, what);
             // Not the silver statistics of the same grains (the clouds

@@ -79,7 +79,7 @@ TEST(Dye, ImageOverlapAgainstIntegrals)
             layer.cloud_diameter_ratio = 1.6;
             layer.cloud_density        = density;
             const ImageOverlap image(layer);
-            const std::string what = std::string(cloud_profile_name(profile)) + " density "
+            const std::string what = std::string(name_of(profile)) + " density "
                                      + std::to_string(density);
             EXPECT_NEAR(image.blocking_um2(1.0), M_PI * blocking_numeric(layer),
                         1e-6 * image.blocking_um2(1.0)) << what;
@@ -225,7 +225,7 @@ TEST(Dye, CloudAreaFactorIsTheBlockingIntegral)
                 make_dye(l, profile, ratio, density);
                 const double expected = blocking_numeric(l);
                 EXPECT_NEAR(cloud_area_factor(l), expected, 1e-6 * expected + 1e-12)
-                    << cloud_profile_name(profile) << " ratio " << ratio << " density " << density;
+                    << name_of(profile) << " ratio " << ratio << " density " << density;
             }
 }
 
@@ -308,7 +308,7 @@ TEST(Dye, UniformPatchesHaveTheExpectedTransmittance)
         const double t = curves[0].transmittance_at(0.18);
         const double t_error = t * std::log(10.0) * curves[0].density_error;
         EXPECT_LT(std::fabs(mean - t), 4.0 * se + t_error)
-            << cloud_profile_name(c.profile) << " ratio " << c.ratio << " " << engine_name(c.engine)
+            << name_of(c.profile) << " ratio " << c.ratio << " " << name_of(c.engine)
             << " limit " << c.limit << ": measured " << mean << " +- " << se << ", expected " << t;
         if (c.limit > 0.0) {  // not what the same clouds give adding
             TestScene added = s;
@@ -348,9 +348,9 @@ TEST(Dye, InhibitedCouplerLimitedPatchesHaveTheExpectedTransmittance)
         settings.engine       = engine;
         const auto [mean, se] = mean_transmittance(render_scene(s, settings), 96);
         EXPECT_LT(std::fabs(mean - t), 4.0 * se + t_error)
-            << engine_name(engine) << ": measured " << mean << " +- " << se << ", expected " << t;
+            << name_of(engine) << ": measured " << mean << " +- " << se << ", expected " << t;
         EXPECT_GT(std::fabs(power - t), 4.0 * se + t_error)
-            << engine_name(engine) << ": the additive reading " << power << " is as close";
+            << name_of(engine) << ": the additive reading " << power << " is as close";
     }
 }
 

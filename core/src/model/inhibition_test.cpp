@@ -182,7 +182,7 @@ TEST(Inhibition, ZeroInhibitionIsNone)
         RenderSettings settings;
         settings.engine = engine;
         EXPECT_TRUE(bit_identical(render_scene(plain, settings), render_scene(zero, settings)))
-            << engine_name(engine);
+            << name_of(engine);
     }
 }
 
@@ -244,7 +244,7 @@ TEST_P(InhibitedPatch, HasTheInhibitedExpectedCurve)
 
 INSTANTIATE_TEST_SUITE_P(Scales, InhibitedPatch,
                          ::testing::Values(ScaleMethod::grain, ScaleMethod::pixel),
-                         [](const auto& info) { return std::string(scale_method_name(info.param)); });
+                         [](const auto& info) { return std::string(name_of(info.param)); });
 
 TEST(Inhibition, PixelScaleIsBitIdenticalForThreadsTilesAndRois)
 {

@@ -316,7 +316,7 @@ TEST(LightSpread, BaseKernelSumsToOne)
                 const BaseHalation b(125.0, n_index, face);
                 const PixelKernel k = base_halation_pixel_kernel(b, p, 1 << 30);
                 EXPECT_NEAR(sum(k.weights), 1.0, 1e-9)
-                    << rear_face_name(face) << " n " << n_index << " pitch " << p;
+                    << name_of(face) << " n " << n_index << " pitch " << p;
                 const int64_t nn = 2 * k.reach + 1;
                 // Symmetric in both axes and the diagonal.
                 for (int64_t j = 0; j <= k.reach; j += 7)
@@ -345,9 +345,9 @@ TEST(LightSpread, BaseKernelSumsToOne)
             halo.scatter          = scatter;
             halo.scatter_sigma_um = scatter > 0.0 ? 40.0 : 0.0;
             const auto out        = spread(halo, img, w, w, 100.0, stock);
-            EXPECT_NEAR(out[120 * w + 120], 3.0 * 1.25, 1.2e-7 * 3.75) << rear_face_name(face);
+            EXPECT_NEAR(out[120 * w + 120], 3.0 * 1.25, 1.2e-7 * 3.75) << name_of(face);
             std::printf("%s, scatter %.1f: uniform field gain 1.25 %+.1e relative\n",
-                        rear_face_name(face), scatter, out[120 * w + 120] / 3.75 - 1.0);
+                        name_of(face), scatter, out[120 * w + 120] / 3.75 - 1.0);
         }
         // The scene continued beyond the frame (edge=clamp, MODEL.md 2): a
         // uniform plate about the reach's size (4 mm; the kernel's light
@@ -364,7 +364,7 @@ TEST(LightSpread, BaseKernelSumsToOne)
         double worst          = 0.0;
         for (float v : out)
             worst = std::max(worst, std::fabs(v / 3.75 - 1.0));
-        EXPECT_LT(worst, 1.2e-7) << rear_face_name(face);
+        EXPECT_LT(worst, 1.2e-7) << name_of(face);
     }
 }
 
@@ -436,11 +436,11 @@ TEST(LightSpread, BaseHaloHasItsRadiusInMicrometresAtEveryPitch)
         }
         for (size_t f = 0; f < 2; ++f) {
             EXPECT_NEAR(radii[0][f], radii[1][f], 10.0)
-                << rear_face_name(face) << " fraction " << f;
-            EXPECT_NEAR(radii[1][f], exact[f], 10.0) << rear_face_name(face) << " fraction " << f;
+                << name_of(face) << " fraction " << f;
+            EXPECT_NEAR(radii[1][f], exact[f], 10.0) << name_of(face) << " fraction " << f;
             std::printf("%s: %s%% of the halo within %.1f um (5 um pixels), %.1f um (10 um), "
                         "%.1f um (the profile)\n",
-                        rear_face_name(face), f ? "90" : "50", radii[0][f], radii[1][f], exact[f]);
+                        name_of(face), f ? "90" : "50", radii[0][f], radii[1][f], exact[f]);
         }
     }
 }
@@ -831,7 +831,7 @@ TEST(LightSpread, ZeroStrengthIsNoSpread)
         RenderSettings settings;
         settings.engine = engine;
         EXPECT_TRUE(bit_identical(render_scene(plain, settings), render_scene(zero, settings)))
-            << engine_name(engine);
+            << name_of(engine);
     }
 }
 

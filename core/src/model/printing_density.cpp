@@ -17,21 +17,6 @@ Density3 status_m_to_apd(const StatusMToApd& map, const Density3& d)
     return apd;
 }
 
-const char* adx_timing_name(AdxTiming timing)
-{
-    return timing == AdxTiming::grey ? "grey" : "off";
-}
-
-bool parse_adx_timing(std::string_view name, AdxTiming& out)
-{
-    for (AdxTiming t : { AdxTiming::off, AdxTiming::grey })
-        if (name == adx_timing_name(t)) {
-            out = t;
-            return true;
-        }
-    return false;
-}
-
 Status printing_density_layers(const std::vector<std::string>& names, std::array<int, 3>& out)
 {
     if (names.size() == 1) {

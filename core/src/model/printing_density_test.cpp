@@ -140,13 +140,13 @@ TEST(PrintingDensity, GreyTimingPutsTheGreyOnCdd070)
 TEST(PrintingDensity, TimingWordsAndLayers)
 {
     AdxTiming t = AdxTiming::grey;
-    EXPECT_TRUE(parse_adx_timing("off", t));
+    EXPECT_TRUE(parse_name("off", t));
     EXPECT_EQ(t, AdxTiming::off);
-    EXPECT_TRUE(parse_adx_timing("grey", t));
+    EXPECT_TRUE(parse_name("grey", t));
     EXPECT_EQ(t, AdxTiming::grey);
     for (const char* bad : { "", "Grey", "gray", "on", "grey " })
-        EXPECT_FALSE(parse_adx_timing(bad, t)) << bad;
-    EXPECT_STREQ(adx_timing_name(AdxTiming::off), "off");
+        EXPECT_FALSE(parse_name(bad, t)) << bad;
+    EXPECT_STREQ(name_of(AdxTiming::off), "off");
 
     std::array<int, 3> l {};
     ASSERT_TRUE(printing_density_layers({ "B", "x", "G", "R" }, l));

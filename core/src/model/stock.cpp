@@ -55,11 +55,11 @@ const NumberField<Layer> kLayerFields[] = {
     { "cloud_density", &Layer::cloud_density, 0.0, 20.0, true },
 };
 
-/// A key that names one of a few words: the key, its values (the enum's
-/// order) and where it is stored in a T (a Layer or the Stock).
-template<typename T, typename E> struct WordField {
+/// A key that names one of a few words: the key, the enumeration's names
+/// (filmgrain/names.h) and where it is stored in a T (a Layer or the Stock).
+template<typename T, typename E, size_t N> struct WordField {
     const char* key;
-    std::vector<const char*> words;
+    const Named<E> (&names)[N];
     E T::*member;
 };
 
@@ -177,51 +177,26 @@ Status parse_population(const Json& j, const std::string& path, Population& out)
     return read_numbers(j, kPopulationFields, {}, path + ".", out);
 }
 
-const WordField<Layer, HalationKernel>& halation_kernel_field()
-{
-    static const WordField<Layer, HalationKernel> f { "halation_kernel",
-                                                      { "disc", "ring", "base" },
-                                                      &Layer::halation_kernel };
-    return f;
-}
-const WordField<Layer, LayerImage>& image_field()
-{
-    static const WordField<Layer, LayerImage> f { "image", { "silver", "dye" }, &Layer::image };
-    return f;
-}
-const WordField<Layer, CloudProfile>& cloud_profile_field()
-{
-    static const WordField<Layer, CloudProfile> f { "cloud_profile", { "disc", "gaussian" },
-                                                    &Layer::cloud_profile };
-    return f;
-}
-const WordField<Stock, RearFace>& rear_face_field()
-{
-    static const WordField<Stock, RearFace> f { "rear_face", { "remjet", "bare" },
-                                                &Stock::rear_face };
-    return f;
-}
+const WordField<Layer, HalationKernel, 3> kHalationKernelField { "halation_kernel",
+                                                                kHalationKernelNames,
+                                                                &Layer::halation_kernel };
+const WordField<Layer, LayerImage, 2> kImageField { "image", kLayerImageNames, &Layer::image };
+const WordField<Layer, CloudProfile, 2> kCloudProfileField { "cloud_profile", kCloudProfileNames,
+                                                             &Layer::cloud_profile };
+const WordField<Stock, RearFace, 2> kRearFaceField { "rear_face", kRearFaceNames,
+                                                     &Stock::rear_face };
 
-template<typename T, typename E>
-Status read_word(const Json& j, const WordField<T, E>& field, const std::string& prefix, T& out)
+template<typename T, typename E, size_t N>
+Status read_word(const Json& j, const WordField<T, E, N>& field, const std::string& prefix,
+                 T& out)
 {
     std::string word;
     if (Status s = read_string(j, field.key, prefix, word); !s)
         return s;
-    std::string allowed;
-    for (size_t i = 0; i < field.words.size(); ++i) {
-        if (word == field.words[i]) {
-            out.*(field.member) = static_cast<E>(i);
-            return {};
-        }
-        allowed += std::string(i ? ", " : "") + "'" + field.words[i] + "'";
-    }
-    return Status::errorf(prefix, field.key, " = '", word, "': must be one of ", allowed);
-}
-
-template<typename T, typename E> const char* word_of(const WordField<T, E>& field, E value)
-{
-    return field.words[static_cast<size_t>(value)];
+    if (value_in(field.names, word, out.*(field.member)))
+        return {};
+    return Status::errorf(prefix, field.key, " = '", word, "': must be one of ",
+                          names_in(field.names, ", ", "'"));
 }
 
 Status parse_layer(const Json& j, const std::string& path, Layer& out)
@@ -239,13 +214,13 @@ Status parse_layer(const Json& j, const std::string& path, Layer& out)
             if (Status s = read_string(j, "name", prefix, out.name); !s)
                 return s;
         } else if (key == "halation_kernel") {
-            if (Status s = read_word(j, halation_kernel_field(), prefix, out); !s)
+            if (Status s = read_word(j, kHalationKernelField, prefix, out); !s)
                 return s;
         } else if (key == "image") {
-            if (Status s = read_word(j, image_field(), prefix, out); !s)
+            if (Status s = read_word(j, kImageField, prefix, out); !s)
                 return s;
         } else if (key == "cloud_profile") {
-            if (Status s = read_word(j, cloud_profile_field(), prefix, out); !s)
+            if (Status s = read_word(j, kCloudProfileField, prefix, out); !s)
                 return s;
         } else if (key == "sensitivity") {
             if (!it->is_array() || it->size() != 3)
@@ -369,20 +344,6 @@ Status validate_printing_density(const Stock& stock)
 }
 
 }  // namespace
-
-const char* halation_kernel_name(HalationKernel kernel)
-{
-    return word_of(halation_kernel_field(), kernel);
-}
-
-const char* rear_face_name(RearFace face) { return word_of(rear_face_field(), face); }
-
-const char* layer_image_name(LayerImage image) { return word_of(image_field(), image); }
-
-const char* cloud_profile_name(CloudProfile profile)
-{
-    return word_of(cloud_profile_field(), profile);
-}
 
 Status Stock::validate() const
 {
@@ -511,7 +472,7 @@ Status parse_stock_json(const std::string& text, const std::string& origin, Stoc
     if (s)
         s = read_string(j, "name", "", stock.name);
     if (s && j.contains("rear_face"))
-        s = read_word(j, rear_face_field(), "", stock);
+        s = read_word(j, kRearFaceField, "", stock);
     if (s)
         s = read_string(j, "description", "", stock.description);
     if (s) {
@@ -578,7 +539,7 @@ std::string stock_to_json(const Stock& stock, int indent)
     j["description"] = stock.description;
     for (const auto& f : kStockFields)
         j[f.key] = stock.*(f.member);
-    j["rear_face"]  = rear_face_name(stock.rear_face);
+    j["rear_face"]  = name_of(stock.rear_face);
     j["inhibition"] = Json::array();
     for (size_t k = 0; k < stock.layers.size(); ++k) {
         Json row = Json::array();
@@ -593,9 +554,9 @@ std::string stock_to_json(const Stock& stock, int indent)
         jl["sensitivity"] = layer.sensitivity;
         for (const auto& f : kLayerFields)
             jl[f.key] = layer.*(f.member);
-        jl["halation_kernel"] = halation_kernel_name(layer.halation_kernel);
-        jl["image"]           = layer_image_name(layer.image);
-        jl["cloud_profile"]   = cloud_profile_name(layer.cloud_profile);
+        jl["halation_kernel"] = name_of(layer.halation_kernel);
+        jl["image"]           = name_of(layer.image);
+        jl["cloud_profile"]   = name_of(layer.cloud_profile);
         jl["populations"] = Json::array();
         for (const Population& pop : layer.populations) {
             Json jp;

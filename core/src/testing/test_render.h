@@ -56,7 +56,7 @@ inline std::vector<float> expect_deterministic(const TestScene& s, const RenderS
     two.nthreads       = 2;
     two.tile_size_px   = tile_px;
     const std::vector<float> a = render_scene(s, one);
-    EXPECT_TRUE(bit_identical(a, render_scene(s, two))) << engine_name(base.engine);
+    EXPECT_TRUE(bit_identical(a, render_scene(s, two))) << name_of(base.engine);
     ScanGeometry scan;
     EXPECT_TRUE(scan_geometry(s.scene, s.view.width, s.view.height, base, scan));
     const Roi whole = base.roi.empty() ? Roi { 0, 0, scan.width, scan.height } : base.roi;
@@ -72,7 +72,7 @@ inline std::vector<float> expect_deterministic(const TestScene& s, const RenderS
                 const auto at_crop
                     = static_cast<size_t>((y - roi.y_begin) * roi.width() + x - roi.x_begin);
                 if (a[at_whole * nl + l] != crop[at_crop * nl + l]) {
-                    ADD_FAILURE() << engine_name(base.engine) << " " << x << "," << y
+                    ADD_FAILURE() << name_of(base.engine) << " " << x << "," << y
                                   << " layer " << l << ": " << a[at_whole * nl + l]
                                   << " in the whole, " << crop[at_crop * nl + l] << " in the crop";
                     return a;
