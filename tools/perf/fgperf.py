@@ -60,15 +60,18 @@ class RunResult:
 TIME = "/usr/bin/time"  # GNU time (Debian package `time`)
 
 
-def cli_env():
+def cli_env(cache_dir=None):
     """The environment of a measured CLI run: no table cache on disk unless
-    FILMGRAIN_CACHE_DIR is set (see the module's docstring)."""
+    FILMGRAIN_CACHE_DIR is set (see the module's docstring), or the tables
+    kept in `cache_dir` when given (a warm cache)."""
     env = dict(os.environ)
+    if cache_dir is not None:
+        env["FILMGRAIN_CACHE_DIR"] = cache_dir
     env.setdefault("FILMGRAIN_CACHE_DIR", "off")
     return env
 
 
-def run_cli(argv, timeout_s=None, stats_path=None):
+def run_cli(argv, timeout_s=None, stats_path=None, cache_dir=None):
     """Runs argv (the CLI and its arguments) as one child and measures it.
 
     The child runs under GNU time, which reports its CPU seconds and peak
@@ -78,6 +81,7 @@ def run_cli(argv, timeout_s=None, stats_path=None):
     never raises on a non-zero exit (the caller reports it). On timeout the
     CLI is killed (SIGKILL, so time still reports its peak memory so far)
     and returncode is -9. stats_path: a --stats file to load into .stats.
+    cache_dir: FILMGRAIN_CACHE_DIR for the run (cli_env).
     """
     if not os.access(TIME, os.X_OK):
         sys.exit(f"tools/perf needs GNU time at {TIME} (apt install time)")
@@ -85,7 +89,7 @@ def run_cli(argv, timeout_s=None, stats_path=None):
         t0 = time.perf_counter()
         proc = subprocess.Popen([TIME, "-f", "%e %U %S %M %x", "-o", tf.name, *argv],
                                 stdout=subprocess.DEVNULL, stderr=err, start_new_session=True,
-                                env=cli_env())
+                                env=cli_env(cache_dir))
         deadline = None if timeout_s is None else t0 + timeout_s
         killed = False
         while True:
