@@ -109,7 +109,9 @@ def run_case(name, args, tmp, warm_dir):
         float_copies += timed("float copy", as_ours, 1, args.timeout)
         renders += timed(name, render, 1, args.timeout, stats=stats, cache_dir=cache_dir)
     layers = renders[-1].stats.get("layers", [])
-    row = {"case": name, "plate": f"{w}x{h}", "modifiers": mods or "(none)",
+    repo = os.path.dirname(os.path.dirname(HERE))
+    shown = mods.replace(REAL_STOCK, os.path.relpath(REAL_STOCK, repo))
+    row = {"case": name, "plate": f"{w}x{h}", "modifiers": shown or "(none)",
            "tables": "on disk" if warm else "built", "runs": repeats,
            "wall_s": median(renders, "wall_s"), "cpu_s": median(renders, "cpu_s"),
            "peak_rss_mib": max(r.peak_rss_mib for r in renders),
@@ -165,7 +167,7 @@ def render_table(rows):
             lead = (f"| {r['case']} | {r['plate']} {r['modifiers']} | {r['tables']} | {r['runs']} "
                     f"| {r['wall_s']:.2f} | {r['cpu_s']:.1f} | {r['peak_rss_mib']:.0f} "
                     f"| {r['copy_s']:.2f} | {r['float_copy_s']:.2f} | {r['ratio']:.2f} "
-                    f"| {r['ratio_to_float_copy']:.2f} ") if first else "| | | | | | | | | | | "
+                    f"| {r['ratio_to_float_copy']:.2f} ") if first else "| " * 11
             lines.append(lead + f"| {what} {target} | {measured} | {'yes' if met else '**no**'} |")
             first = False
     lines += ["", "Paths per layer (--stats `path`):", ""]
