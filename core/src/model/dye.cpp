@@ -163,7 +163,6 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
     // A chord end: where, and a code: +(1 + 2 p) where a cloud of
     // population p enters, -(1 + 2 p) where it leaves (p = 0 without
     // `population`: the codes +-1 of a plain count).
-    std::vector<std::pair<double, int>>& ends = scratch.ends;
     std::vector<std::pair<double, int>>& enters = scratch.enters;
     std::vector<std::pair<double, int>>& leaves = scratch.leaves;
     std::vector<size_t>& by_x = scratch.by_x;
@@ -234,12 +233,22 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
             leaves.resize(static_cast<size_t>(leave - leaves.data()));
             sort_nearly_sorted(enters);
             sort_nearly_sorted(leaves);
-            ends.resize(enters.size() + leaves.size());
-            std::merge(enters.begin(), enters.end(), leaves.begin(), leaves.end(), ends.begin());
-            ends.push_back({ right, 0 });
+            // The two sorted sequences merged as the sweep reads them (as
+            // std::merge orders them: a leave before an enter only if it
+            // compares less), then the row's right end (code 0).
+            const std::pair<double, int>* en = enters.data();
+            const std::pair<double, int>* const en_end = en + enters.size();
+            const std::pair<double, int>* le = leaves.data();
+            const std::pair<double, int>* const le_end = le + leaves.size();
+            const std::pair<double, int> row_end { right, 0 };
             double x   = left;
             int64_t ix = x0;  // the pixel holding x
-            for (const auto& [at, code] : ends) {
+            for (;;) {
+                const std::pair<double, int>& next
+                    = le != le_end && (en == en_end || *le < *en) ? *le++
+                      : en != en_end                            ? *en++
+                                                                : row_end;
+                const auto& [at, code] = next;
                 // [x, at) has the clouds `count` holds: cut it at the pixel edges.
                 const double t = count.transmittance();
                 while (x < at) {
@@ -253,9 +262,9 @@ void disc_rows(const std::vector<Disc>& grains, const uint8_t* population, const
                         break;
                 }
                 x = std::max(x, at);
-                if (code != 0)
-                    count.step(code > 0 ? +1 : -1,
-                               static_cast<uint8_t>((std::abs(code) - 1) / 2));
+                if (code == 0)
+                    break;
+                count.step(code > 0 ? +1 : -1, static_cast<uint8_t>((std::abs(code) - 1) / 2));
             }
         }
         for (int64_t ix = 0; ix < tw; ++ix)

@@ -137,7 +137,7 @@ struct DyeScratch {
     std::vector<size_t> offsets, fill, members;
     std::vector<uint8_t> population;  ///< each grain's, for coupler limits
     std::vector<int64_t> density;  ///< fixed point, 2^-32 density units
-    std::vector<std::pair<double, int>> ends, enters, leaves;
+    std::vector<std::pair<double, int>> enters, leaves;
     std::vector<size_t> by_x;  ///< a pixel row's clouds, by centre
     /// Per sample row of a pixel row: the clouds it crosses, by centre.
     std::vector<std::vector<size_t>> crossing;
