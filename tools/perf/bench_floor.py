@@ -39,7 +39,6 @@ is printed and written.
 
 import json
 import os
-import shutil
 import sys
 import tempfile
 import time
@@ -70,19 +69,14 @@ CASES = {
 
 
 def timed(label, argv, repeats, timeout, stats=None, cache_dir=None):
-    """Runs argv `repeats` times (fgperf.run_cli); the list of RunResults."""
+    """Runs argv `repeats` times (fgperf.run_logged); the list of RunResults."""
     out = []
     for i in range(repeats):
-        load = os.getloadavg()[0]
-        r = fgperf.run_cli(argv, timeout_s=timeout, stats_path=stats, cache_dir=cache_dir)
-        r.load = load
+        r = fgperf.run_logged(f"{label:10s} run {i + 1}/{repeats}", argv, timeout_s=timeout,
+                              stats_path=stats, cache_dir=cache_dir)
         out.append(r)
-        status = "ok" if r.ok else ("TIMEOUT" if r.returncode == -9 else f"exit {r.returncode}")
-        print(f"  {label:10s} run {i + 1}/{repeats}: wall {fgperf.fmt_s(r.wall_s):>9s} CPU "
-              f"{fgperf.fmt_s(r.cpu_s):>9s} peak {r.peak_rss_mib:6.0f} MiB load {load:.1f} "
-              f"{status}", flush=True)
         if not r.ok:
-            raise RuntimeError(f"{label}: {status}: {r.stderr.strip()[-400:]}")
+            raise RuntimeError(f"{label}: {r.status}: {r.stderr.strip()[-400:]}")
     return out
 
 
@@ -184,16 +178,7 @@ def main(argv=None):
                     help="rounds of copy, float copy and render per case (8k, 16mm, super8: one)")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds before a run is killed")
     ap.add_argument("--no-write", action="store_true", help="print only; write no files")
-    args = ap.parse_args(argv)
-    if not os.access(args.bin, os.X_OK):
-        sys.exit(f"bench_floor: {args.bin} is not an executable (build first)")
-    if not shutil.which("oiiotool"):
-        sys.exit("bench_floor: needs oiiotool (openimageio-tools)")
-    names = args.only.split(",") if args.only else list(CASES)
-    unknown = [n for n in names if n not in CASES]
-    if unknown:
-        sys.exit(f"bench_floor: unknown case(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
-    os.makedirs(args.cache, exist_ok=True)
+    args, names = bench_frames.parse_case_args(ap, argv, CASES, "bench_floor")
     rows, t0, load0 = [], time.perf_counter(), os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="bench_floor_") as tmp:
         warm_dir = os.path.join(tmp, "tables")

@@ -148,13 +148,9 @@ class Bench:
             argv += ["--threads", str(threads)]
         results = []
         for i in range(repeats):
-            load0 = os.getloadavg()[0]
-            r = fgperf.run_cli(argv, timeout_s=timeout, stats_path=stats)
+            r = fgperf.run_logged(f"{label:28s} run {i + 1}/{repeats}", argv, timeout_s=timeout,
+                                  stats_path=stats)
             results.append(r)
-            status = "ok" if r.ok else ("TIMEOUT" if r.returncode == -9 else f"exit {r.returncode}")
-            print(f"  {label:28s} run {i + 1}/{repeats}: wall {fgperf.fmt_s(r.wall_s):>9s} "
-                  f"CPU {fgperf.fmt_s(r.cpu_s):>9s} peak {r.peak_rss_mib:7.0f} MiB "
-                  f"load {load0:.1f} {status}", flush=True)
             if not r.ok:
                 if r.returncode != -9:
                     print("    " + r.stderr.strip().replace("\n", "\n    "), flush=True)
@@ -517,6 +513,24 @@ def frame_parser(doc):
     return ap
 
 
+def parse_case_args(ap, argv, cases, prog):
+    """Parses a whole-frame script's command line (frame_parser's, with
+    --only): exits with a message when --bin is not an executable, oiiotool
+    is missing or --only names an unknown case; makes --cache. Returns
+    (args, the case names to run, in order)."""
+    args = ap.parse_args(argv)
+    if not os.access(args.bin, os.X_OK):
+        sys.exit(f"{prog}: {args.bin} is not an executable (build first)")
+    if not shutil.which("oiiotool"):
+        sys.exit(f"{prog}: needs oiiotool (openimageio-tools)")
+    os.makedirs(args.cache, exist_ok=True)
+    names = args.only.split(",") if args.only else list(cases)
+    unknown = [n for n in names if n not in cases]
+    if unknown:
+        sys.exit(f"{prog}: unknown case(s) {', '.join(unknown)}; known: {', '.join(cases)}")
+    return args, names
+
+
 def main(argv=None):
     ap = frame_parser(__doc__)
     ap.add_argument("--only", default=None, help="comma-separated cases: " + ",".join(CASES))
@@ -529,16 +543,7 @@ def main(argv=None):
                     help="seconds the full fine4k frame runs (to measure its memory) when its "
                          "1/64 ROI predicts more than --timeout")
     ap.add_argument("--no-write", action="store_true", help="print only; write no files")
-    args = ap.parse_args(argv)
-    if not os.access(args.bin, os.X_OK):
-        sys.exit(f"bench_frames: {args.bin} is not an executable (build first)")
-    if not shutil.which("oiiotool"):
-        sys.exit("bench_frames: needs oiiotool (openimageio-tools) to make its inputs")
-    os.makedirs(args.cache, exist_ok=True)
-    names = args.only.split(",") if args.only else list(CASES)
-    unknown = [n for n in names if n not in CASES]
-    if unknown:
-        sys.exit(f"bench_frames: unknown case(s) {', '.join(unknown)}; known: {', '.join(CASES)}")
+    args, names = parse_case_args(ap, argv, CASES, "bench_frames")
     rep = 1 if args.quick else args.repeats
     b = Bench(args)
     rows, seconds = [], {}

@@ -132,6 +132,19 @@ def run_cli(argv, timeout_s=None, stats_path=None, cache_dir=None):
     return res
 
 
+def run_logged(label, argv, timeout_s=None, stats_path=None, cache_dir=None):
+    """run_cli, with a line for the run printed (label, wall and CPU
+    seconds, peak memory, the load average at its start, its status); the
+    RunResult gets .load (that load) and .status."""
+    load = os.getloadavg()[0]
+    r = run_cli(argv, timeout_s=timeout_s, stats_path=stats_path, cache_dir=cache_dir)
+    r.load = load
+    r.status = "ok" if r.ok else ("TIMEOUT" if r.returncode == -9 else f"exit {r.returncode}")
+    print(f"  {label}: wall {fmt_s(r.wall_s):>9s} CPU {fmt_s(r.cpu_s):>9s} peak "
+          f"{r.peak_rss_mib:7.0f} MiB load {load:.1f} {r.status}", flush=True)
+    return r
+
+
 def _children(pid):
     """Pids of the direct children of pid (Linux /proc)."""
     out = []
