@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
@@ -317,16 +317,18 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
             }
             return x;
         };
-        // One of `names` (the option's words); exits 2 on another.
-        const auto choice = [&](std::initializer_list<const char*> names) -> std::string {
+        // One of the names (filmgrain/names.h) of the enumeration of `e`:
+        // its value; exits 2 on another word.
+        const auto choice = [&](auto e) {
+            const auto& names = names_of(e);
             std::string list;  // "a, b or c"
             size_t k = 0;
-            for (const char* n : names)
-                list += (k++ == 0 ? "" : k == names.size() ? " or " : ", ") + std::string(n);
+            for (const auto& n : names)
+                list += (k++ == 0 ? "" : k == std::size(names) ? " or " : ", ")
+                        + std::string(n.name);
             const std::string v = next(list.c_str());
-            for (const char* n : names)
-                if (v == n)
-                    return v;
+            if (filmgrain::parse_name(v, e))
+                return e;
             std::cerr << "filmgrain-fit: " << a << " " << v << ": must be " << list << "\n";
             std::exit(2);
         };
@@ -380,12 +382,9 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
         } else if (a == "--no-rates") {
             opt.fit_rates = false;
         } else if (a == "--image") {
-            opt.image = choice({ "silver", "dye" }) == "dye" ? filmgrain::LayerImage::dye
-                                                             : filmgrain::LayerImage::silver;
+            opt.image = choice(filmgrain::LayerImage {});
         } else if (a == "--cloud-profile") {
-            opt.cloud_profile = choice({ "disc", "gaussian" }) == "disc"
-                                    ? filmgrain::CloudProfile::disc
-                                    : filmgrain::CloudProfile::gaussian;
+            opt.cloud_profile = choice(filmgrain::CloudProfile {});
         } else if (a == "--coupler-limited") {
             opt.coupler_limited = static_cast<int>(integer("N", 0, 4));
         } else if (a == "--start-cloud-ratio") {
@@ -401,17 +400,13 @@ std::optional<int> parse_command_line(int argc, char** argv, FitCommand& cmd)
         } else if (a == "--halation-radius-um") {
             halation_radius_um = number("micrometres", 0.0, 5000.0);
         } else if (a == "--halation-kernel") {
-            const std::string v = choice({ "disc", "ring", "base" });
-            halation_kernel = v == "disc"   ? filmgrain::HalationKernel::disc
-                              : v == "ring" ? filmgrain::HalationKernel::ring
-                                            : filmgrain::HalationKernel::base;
+            halation_kernel = choice(filmgrain::HalationKernel {});
         } else if (a == "--base-thickness-um") {
             base_thickness_um = number("micrometres", 0.0, 2000.0);
         } else if (a == "--base-refractive-index") {
             base_refractive_index = number("a number", 1.3, 2.0);
         } else if (a == "--rear-face") {
-            rear_face = choice({ "remjet", "bare" }) == "remjet" ? filmgrain::RearFace::remjet
-                                                                 : filmgrain::RearFace::bare;
+            rear_face = choice(filmgrain::RearFace {});
         } else if (a == "--no-light-spread") {
             cmd.no_light_spread = true;
         } else if (a == "--inhibition") {
