@@ -429,7 +429,8 @@ const Modifier kModifiers[] = {
       parse_grains_value },
     { "scale", names_in(kScaleNames, "|"),
       "expert override: every grain simulated, or each pixel's transmittance drawn from the "
-      "Boolean model's pixel statistics (for grains far below the pixel)",
+      "Boolean model's pixel statistics (for grains far below the pixel), or mixed: the pixel "
+      "statistics for each pixel whose exposure develops >= 3.9 grains, grains elsewhere",
       [](const FilmgrainCommand&) {
           return engine_choice("pixel where every grain is under a pixel and even fog "
                                "develops >= 3.9 grains per pixel, else grain");

@@ -142,6 +142,9 @@ enum class ScaleMethod {
             ///< pixel statistics (mean, variance, neighbour correlation),
             ///< for grains far below the pixel (Gaussian approximation,
             ///< measured in docs/performance)
+    mixed,  ///< pixel where a pixel's exposure develops enough grains for
+            ///< its pixel statistics (what auto's pixel asks of a layer's
+            ///< fog), grain elsewhere (measured in docs/performance)
 };
 
 /// Names as used on the command line, in metadata and statistics
@@ -164,7 +167,8 @@ inline constexpr Named<CoverageMethod> kCoverageNames[] = { { CoverageMethod::ex
 inline constexpr Named<GrainMethod> kGrainNames[] = { { GrainMethod::exact, "exact" },
                                                       { GrainMethod::fast, "fast" } };
 inline constexpr Named<ScaleMethod> kScaleNames[] = { { ScaleMethod::grain, "grain" },
-                                                      { ScaleMethod::pixel, "pixel" } };
+                                                      { ScaleMethod::pixel, "pixel" },
+                                                      { ScaleMethod::mixed, "mixed" } };
 
 constexpr const auto& names_of(Engine) { return kEngineNames; }
 constexpr const auto& names_of(KineticsMethod) { return kKineticsNames; }

@@ -546,7 +546,7 @@ void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bou
 {
     for (size_t l = 0; l < out.size() && !c.exact; ++l) {
         LayerPlan& plan = out[l];
-        if (plan.dye_samples > 0 || plan.pixel_model)  // no coverage to choose
+        if (plan.dye_samples > 0 || (plan.pixel_model && plan.pixel_floor == 0.0))  // no coverage
             continue;
         const double smallest_radius_um = smallest_mean_radius_um(c.stock.layers[l]);
         const double budget = std::max(kRasterShare * c.settings.tolerance,
@@ -593,8 +593,9 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
             if (grains_s <= pixel_s)
                 continue;
         }
+        const char* asked_name = asked == ScaleMethod::mixed ? "scale=mixed" : "scale=pixel";
         if (!curves)
-            return Status::errorf("scale=pixel: layer '", layer.name,
+            return Status::errorf(asked_name, ": layer '", layer.name,
                                   "' needs P(develop | mean photons) for every population, which "
                                   "kinetics=chain|early|table, grains=exact and populations with "
                                   "rate_area_exponent != 0 do not have: use scale=grain");
@@ -619,11 +620,16 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         const double fog_grains = PixelModel::compute(pops, c.frame.scan_pitch_x_um,
                                                       c.frame.scan_pitch_y_um, 0.0, image)
                                       .developed_per_pixel;
-        if (!asked && fog_grains < kMinDevelopedPerPixel)
-            continue;
         // An inhibited layer (MODEL.md 10): its statistics over the log
         // factor too, up to the stock's bound on it.
         const double max_log_factor = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
+        // Too few at fog: auto keeps the grains (the pixel law is not
+        // shown to hold there: for 500T's blue in 3 um pixels it does not,
+        // docs/performance); scale=mixed takes the pixel scale where a
+        // pixel's exposure develops enough.
+        if (!asked && fog_grains < kMinDevelopedPerPixel)
+            continue;
+        const bool mixed = asked == ScaleMethod::mixed && fog_grains < kMinDevelopedPerPixel;
         auto model = shared_pixel_model(pops, c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um,
                                         layer, image, max_log_factor, c.settings.nthreads,
                                         c.stock.max_density);
@@ -633,7 +639,7 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         if (model->lags() < 0) {
             if (!asked)
                 continue;
-            return Status::errorf("scale=pixel: layer '", layer.name,
+            return Status::errorf(asked_name, ": layer '", layer.name,
                                   "': its pixels' correlations reach beyond ", kMaxLag,
                                   " pixels (", format_g(100.0 * model->max_dropped_correlation()),
                                   "% of their sum left out there: grains or clouds too large "
@@ -641,7 +647,10 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         }
         plan.pixel_model = std::move(model);
         plan.pixel_key   = hash_ids(grain_seed(c.scene), 0x9133, l);
-        plan.dye_samples = 0;  // no per-grain image
+        if (mixed)
+            plan.pixel_floor = kMinDevelopedPerPixel;
+        else
+            plan.dye_samples = 0;  // no per-grain image
         const PixelModel& pm = *plan.pixel_model;
         // The table's interpolation error of the mean transmittance, as
         // density.
@@ -692,10 +701,14 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     if (Status s = choose_scale(c, inhibition, out); !s)
         return s;
     choose_raster(c, kinetics_bound, out);
+    // (A mixed layer's estimate is an upper bound: as if every pixel took
+    // both paths.)
     for (size_t l = 0; l < out.size(); ++l)
         out[l].estimated_seconds
-            = out[l].pixel_model ? pixel_path_seconds(c, c.roi_pixels())
-                                 : grain_path_seconds(c, l, out[l], c.roi_area_um2(), c.roi_pixels());
+            = (!out[l].pixel_model || out[l].pixel_floor > 0.0
+                   ? grain_path_seconds(c, l, out[l], c.roi_area_um2(), c.roi_pixels())
+                   : 0.0)
+              + (out[l].pixel_model ? pixel_path_seconds(c, c.roi_pixels()) : 0.0);
     describe(c, inhibition, out);
     return {};
 }

@@ -112,6 +112,13 @@ struct LayerPlan {
     /// No light reaches the layer anywhere in the region the render reads
     /// (read_region): its grains develop by fog alone (KineticsMethod::fog).
     bool unlit = false;
+    /// With pixel_model (above), 0: every pixel at pixel scale. > 0
+    /// (scale=mixed on a layer whose fog develops too few grains per pixel
+    /// for its pixel statistics): only the pixels whose expected developed
+    /// grains (the model's developed_per_pixel at the pixel's exposure and
+    /// log factor) reach it are drawn from the model; the others are
+    /// rendered grain by grain, with the layer's grain paths above.
+    double pixel_floor = 0.0;
 };
 
 /// Empties the process's cache of pixel models (plan_layers builds a

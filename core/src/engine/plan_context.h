@@ -46,7 +46,8 @@ struct PlanContext {
                                                     scene_.exposure_stops))
         , exact(settings_.engine == Engine::exact)
         , fast(settings_.engine == Engine::fast)
-        , forced_table(settings_.kinetics.has_value() || settings_.scale == ScaleMethod::pixel)
+        , forced_table(settings_.kinetics.has_value() || settings_.scale == ScaleMethod::pixel
+                       || settings_.scale == ScaleMethod::mixed)
         , development(stock_)
         , region(read_region(stock_, scene_, input_, frame_, roi_))
         , workers(parallel_workers(std::numeric_limits<int64_t>::max(), settings_.nthreads))

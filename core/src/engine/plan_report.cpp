@@ -102,6 +102,8 @@ void describe_grain_path(const PlanContext& c, const LayerPlan& plan, std::ostri
     if (plan.dye_samples == 0
         && (plan.coverage == CoverageMethod::scanline || plan.coverage == CoverageMethod::raster))
         path << " samples=" << plan.coverage_samples;
+    if (plan.pixel_model)  // the pixel scale where pixels develop enough
+        path << " scale=" << name_of(ScaleMethod::mixed);
     if (c.exact) {
         why << "the reference engine: every photon, each chain until its grain is decided, "
             << (plan.dye_samples > 0 ? "the dye image as above" : "exact coverage");
@@ -164,7 +166,8 @@ void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& p
                 << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
                 << "; radii from tabulated quantiles: relative error of the mean area "
                 << format_g(pp.fast->mean_area_relative_error()) << ")";
-        if (pp.curve && pp.fast && !plan.pixel_model && !plan.notes.fog_alone)
+        if (pp.curve && pp.fast && (!plan.pixel_model || plan.pixel_floor > 0.0)
+            && !plan.notes.fog_alone)
             why << "; a grain whose uniform cannot reach the curve's bound at the brightest "
                    "pixel its disc can touch cannot develop: counted, not positioned (the same "
                    "grains develop)";
@@ -183,6 +186,10 @@ void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& p
             << (u->grain_s <= u->pixel_s
                     ? "grain by grain; "
                     : "the pixel scale where its statistics describe the layer; ");
+    if (plan.pixel_model && plan.pixel_floor > 0.0)
+        why << "pixel scale where a pixel's expected developed grains (at its exposure and log "
+               "factor) reach "
+            << format_g(plan.pixel_floor) << ", grain by grain elsewhere; ";
     if (const auto& px = plan.notes.pixel_scale) {
         const PixelModel& pm = *plan.pixel_model;
         why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
@@ -214,7 +221,7 @@ void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vecto
         std::ostringstream notes, path, why;
         describe_notes(c, c.stock.layers[l], plan, notes);
         describe_layer_image(c, l, plan, inhibition, path, why);
-        if (plan.pixel_model) {
+        if (plan.pixel_model && plan.pixel_floor == 0.0) {
             // Each pixel's exposure is its input pixel's mean: no photons=.
             path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve");
             plan.path   = path.str();

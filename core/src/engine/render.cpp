@@ -206,14 +206,14 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
             return s;
 
         // Tiles hold at most kGrainsPerTile grains (all layers that
-        // generate grains: a layer at pixel scale has none, its work is per
-        // pixel) whatever the pixel size: memory follows the tile's work,
-        // every thread gets tiles, and a stop is seen within a tile
+        // generate grains: a layer wholly at pixel scale has none, its work
+        // is per pixel) whatever the pixel size: memory follows the tile's
+        // work, every thread gets tiles, and a stop is seen within a tile
         // (render_tile checks it every few thousand grains). Speed only:
         // never the output.
         double grains_per_px = 0.0;
         for (size_t l = 0; l < stock.layers.size(); ++l)
-            if (!plan[l].pixel_model)
+            if (!plan[l].pixel_model || plan[l].pixel_floor > 0.0)
                 for (const Population& pop : stock.layers[l].populations)
                     grains_per_px
                         += pop.grains_per_um2 * frame.scan_pitch_x_um * frame.scan_pitch_y_um;

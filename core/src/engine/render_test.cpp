@@ -42,7 +42,7 @@ TestScene small_scene()
 std::vector<std::pair<const char*, RenderSettings>> engine_variants()
 {
     RenderSettings exact, automatic, auto_grain, auto_table, fast_table, auto_kernel,
-        fast_kernel, kernel_exact_coverage, kernel_disc_exposure, pixel_scale;
+        fast_kernel, kernel_exact_coverage, kernel_disc_exposure, pixel_scale, mixed_scale;
     exact.engine      = Engine::exact;
     automatic.engine  = Engine::automatic;
     auto_grain.engine = Engine::automatic;
@@ -60,6 +60,8 @@ std::vector<std::pair<const char*, RenderSettings>> engine_variants()
     fast_kernel.scale                 = ScaleMethod::grain;
     pixel_scale.engine                = Engine::automatic;
     pixel_scale.scale                 = ScaleMethod::pixel;
+    mixed_scale.engine                = Engine::automatic;
+    mixed_scale.scale                 = ScaleMethod::mixed;
     kernel_exact_coverage             = auto_kernel;
     kernel_exact_coverage.coverage    = CoverageMethod::exact;
     // Its exposure integrated over each disc (photons=disc) instead of
@@ -75,7 +77,8 @@ std::vector<std::pair<const char*, RenderSettings>> engine_variants()
              { "fast kinetics=curve", fast_kernel },
              { "auto kinetics=curve coverage=exact", kernel_exact_coverage },
              { "auto kinetics=curve photons=disc", kernel_disc_exposure },
-             { "auto scale=pixel", pixel_scale } };
+             { "auto scale=pixel", pixel_scale },
+             { "auto scale=mixed", mixed_scale } };
 }
 
 TEST(Render, BitIdenticalForThreadsAndTiles)
@@ -161,6 +164,61 @@ TEST(Render, RoiIsACropOfTheFullRender)
                         << name << ": " << x << "," << y << " layer " << l;
                 }
     }
+}
+
+/// scale=mixed (what auto takes where a layer's fog develops too few
+/// grains per pixel): each pixel is the pixel scale's (the same model and
+/// normals as scale=pixel) where its exposure develops enough grains, else
+/// the per-grain kernel's (the same grains as scale=grain with its curves),
+/// bit for bit, whatever the tiles, threads or ROI. VISION3 500T in 3 um
+/// pixels (its blue fog develops about 2.4 grains a pixel) under a ramp
+/// from black to 16 times grey.
+TEST(Render, MixedScaleTakesEachPixelFromThePixelOrTheGrainRender)
+{
+    TestScene s;
+    ASSERT_TRUE(load_stock("vision3-500t", s.stock));
+    const int w = 96, h = 24;
+    s.scene.width_mm = w * 3.0e-3;
+    s.pixels.resize(w * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                s.pixels[(y * w + x) * 3 + c]
+                    = x < 16 ? 0.0f : static_cast<float>(0.18 * std::exp2((x - 56) / 10.0));
+    s.view = ImageView { s.pixels.data(), w, h, 3 };
+    RenderSettings mixed, grain, pixel;
+    mixed.scale    = ScaleMethod::mixed;
+    grain.scale    = ScaleMethod::grain;
+    grain.kinetics = KineticsMethod::curve;
+    pixel.scale    = ScaleMethod::pixel;
+    RenderStats stats;
+    const std::vector<float> m = expect_deterministic(s, mixed, Roi { 21, 3, 70, 19 });
+    render_scene(s, mixed, &stats);
+    const std::vector<float> g = render_scene(s, grain);
+    const std::vector<float> p = render_scene(s, pixel);
+    ASSERT_EQ(stats.layers.size(), 3u);
+    const size_t blue = 2;
+    EXPECT_NE(stats.layers[blue].reason.find("pixel scale where"), std::string::npos);
+    EXPECT_NE(stats.layers[blue].path.find("scale=mixed"), std::string::npos);
+    EXPECT_GT(stats.layers[blue].grains, 0u);
+    size_t from_grain = 0, from_pixel = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y * w + x) * 3 + blue;
+            const bool is_grain = std::memcmp(&m[i], &g[i], sizeof(float)) == 0;
+            const bool is_pixel = std::memcmp(&m[i], &p[i], sizeof(float)) == 0;
+            ASSERT_TRUE(is_grain || is_pixel) << x << "," << y;
+            from_grain += is_grain && !is_pixel;
+            from_pixel += is_pixel && !is_grain;
+            if (x < 16) {  // black: fog alone, too few grains a pixel
+                EXPECT_TRUE(is_grain) << x << "," << y;
+            }
+            if (x >= 80) {  // 2.4 stops over grey and brighter
+                EXPECT_TRUE(is_pixel) << x << "," << y;
+            }
+        }
+    EXPECT_GT(from_grain, 0u);
+    EXPECT_GT(from_pixel, 0u);
 }
 
 TEST(Render, AWindowOfTheInputIsEnough)

@@ -58,146 +58,153 @@ public:
     /// Renders the scan pixels [x0, x1) x [y0, y1) of every layer.
     void render_tile(TileScratch& scratch, int64_t x0, int64_t y0, int64_t x1, int64_t y1)
     {
-        const RectUm rect = m_frame.scan_rect(x0, y0, x1, y1);
         for (size_t l = 0; l < m_layers.size(); ++l) {
-            const LayerPlan& layer = m_layers[l];
-            if (layer.pixel_model) {
+            if (m_layers[l].pixel_model)
                 write_pixel_scale(scratch, l, x0, y0, x1, y1);
+            else
+                render_grains(scratch, l, x0, y0, x1, y1);
+        }
+    }
+
+    /// Layer l's scan pixels [x0, x1) x [y0, y1) grain by grain: its grains
+    /// generated, exposed and developed, their image written.
+    void render_grains(TileScratch& scratch, size_t l, int64_t x0, int64_t y0, int64_t x1,
+                       int64_t y1)
+    {
+        const RectUm rect      = m_frame.scan_rect(x0, y0, x1, y1);
+        const LayerPlan& layer = m_layers[l];
+        scratch.discs.clear();
+        scratch.population_end.clear();
+        uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
+        bool plane_filled = false;
+        for (const PopulationPlan& pop : layer.populations) {
+            if (pop.fast && pop.kinetics == KineticsMethod::fog) {
+                // No light: no exposure to read; every grain of the
+                // fog's thinned process develops (but for inhibition).
+                FastCounts c;
+                if (layer.inhibition)
+                    develop_fast<false>(layer, pop, rect, scratch, c, NoLight {});
+                else
+                    develop_fast<true>(layer, pop, rect, scratch, c, NoLight {});
+                grains += c.grains;
+                developed += c.developed;
+                scratch.population_end.push_back(scratch.discs.size());
                 continue;
             }
-            scratch.discs.clear();
-            scratch.population_end.clear();
-            uint64_t grains = 0, developed = 0, photons = 0, events = 0, early = 0;
-            bool plane_filled = false;
-            for (const PopulationPlan& pop : layer.populations) {
-                if (pop.fast && pop.kinetics == KineticsMethod::fog) {
-                    // No light: no exposure to read; every grain of the
-                    // fog's thinned process develops (but for inhibition).
-                    FastCounts c;
-                    if (layer.inhibition)
-                        develop_fast<false>(layer, pop, rect, scratch, c, NoLight {});
-                    else
-                        develop_fast<true>(layer, pop, rect, scratch, c, NoLight {});
-                    grains += c.grains;
-                    developed += c.developed;
-                    scratch.population_end.push_back(scratch.discs.size());
-                    continue;
+            if (pop.fast) {
+                if (!plane_filled) {
+                    // Grain centres lie within margin_um of the tile,
+                    // their discs within twice that.
+                    const bool discs = std::any_of(
+                        layer.populations.begin(), layer.populations.end(),
+                        [](const PopulationPlan& pp) {
+                            return pp.fast && pp.exposure == ExposureMethod::disc;
+                        });
+                    // (No wider: a ROI's render reads no input beyond
+                    // read_region. The grain filter reads this plane
+                    // and keeps every grain of a cell whose discs may
+                    // reach past it.)
+                    const double m = (discs ? 2.0 : 1.0) * layer.margin_um;
+                    scratch.plane.fill(layer.exposure, m_frame,
+                                       { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
+                                         rect.y1_um + m });
+                    plane_filled = true;
                 }
-                if (pop.fast) {
-                    if (!plane_filled) {
-                        // Grain centres lie within margin_um of the tile,
-                        // their discs within twice that.
-                        const bool discs = std::any_of(
-                            layer.populations.begin(), layer.populations.end(),
-                            [](const PopulationPlan& pp) {
-                                return pp.fast && pp.exposure == ExposureMethod::disc;
-                            });
-                        // (No wider: a ROI's render reads no input beyond
-                        // read_region. The grain filter reads this plane
-                        // and keeps every grain of a cell whose discs may
-                        // reach past it.)
-                        const double m = (discs ? 2.0 : 1.0) * layer.margin_um;
-                        scratch.plane.fill(layer.exposure, m_frame,
-                                           { rect.x0_um - m, rect.y0_um - m, rect.x1_um + m,
-                                             rect.y1_um + m });
-                        plane_filled = true;
+                FastCounts c;
+                // The exposure integral of a batch's grain i (value x
+                // um^2), the j-th of the indices given to prepare().
+                struct Centre {
+                    const ExposurePlane& plane;
+                    void prepare(const FastGrains::Batch&, const uint32_t*, size_t) const {}
+                    double operator()(const FastGrains::Batch& b, size_t i, size_t) const
+                    {
+                        return plane.at(b.x[i], b.y[i]) * b.r[i] * b.r[i] * M_PI;
                     }
-                    FastCounts c;
-                    // The exposure integral of a batch's grain i (value x
-                    // um^2), the j-th of the indices given to prepare().
-                    struct Centre {
-                        const ExposurePlane& plane;
-                        void prepare(const FastGrains::Batch&, const uint32_t*, size_t) const {}
-                        double operator()(const FastGrains::Batch& b, size_t i, size_t) const
-                        {
-                            return plane.at(b.x[i], b.y[i]) * b.r[i] * b.r[i] * M_PI;
+                };
+                // Over the disc: from the plane, a cell at a time, for
+                // discs up to half an input pixel in radius (they cross
+                // at most one pixel edge each way), one at a time up to
+                // a pixel, else (grains larger than the input pixels)
+                // from the input image.
+                struct Disc {
+                    const ExposurePlane& plane;
+                    const LayerExposure& exposure;
+                    TileScratch::DiscBatch& scratch;
+                    double pitch_um;  ///< the input pixel's
+                    void prepare(const FastGrains::Batch& b, const uint32_t* index,
+                                 size_t m) const
+                    {
+                        scratch.resize(m);
+                        for (size_t j = 0; j < m; ++j) {
+                            scratch.x[j] = b.x[index[j]];
+                            scratch.y[j] = b.y[index[j]];
+                            scratch.r[j] = b.r[index[j]];
                         }
-                    };
-                    // Over the disc: from the plane, a cell at a time, for
-                    // discs up to half an input pixel in radius (they cross
-                    // at most one pixel edge each way), one at a time up to
-                    // a pixel, else (grains larger than the input pixels)
-                    // from the input image.
-                    struct Disc {
-                        const ExposurePlane& plane;
-                        const LayerExposure& exposure;
-                        TileScratch::DiscBatch& scratch;
-                        double pitch_um;  ///< the input pixel's
-                        void prepare(const FastGrains::Batch& b, const uint32_t* index,
-                                     size_t m) const
-                        {
-                            scratch.resize(m);
-                            for (size_t j = 0; j < m; ++j) {
-                                scratch.x[j] = b.x[index[j]];
-                                scratch.y[j] = b.y[index[j]];
-                                scratch.r[j] = b.r[index[j]];
-                            }
-                            plane.integrals_over_discs(scratch.x.data(), scratch.y.data(),
-                                                       scratch.r.data(), m, scratch.value.data());
-                        }
-                        double operator()(const FastGrains::Batch& b, size_t i, size_t j) const
-                        {
-                            const double r_um = b.r[i];
-                            if (r_um <= 0.5 * pitch_um)
-                                return scratch.value[j];
-                            return r_um <= pitch_um
-                                       ? plane.integral_over_disc(b.x[i], b.y[i], r_um)
-                                       : exposure.integrate_over_disc(b.x[i], b.y[i], r_um);
-                        }
-                    };
-                    const Centre centre { scratch.plane };
-                    const Disc disc { scratch.plane, layer.exposure, scratch.disc_batch,
-                                      scratch.plane.pitch_um() };
-                    // Silver without inhibition (the common case) runs the
-                    // kernel without the per-grain checks of MODEL.md 8, 10.
-                    const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
-                    const auto run = [&](const auto& integral) {
-                        if (plain)
-                            develop_fast<true>(layer, pop, rect, scratch, c, integral);
-                        else
-                            develop_fast<false>(layer, pop, rect, scratch, c, integral);
-                    };
-                    if (pop.exposure == ExposureMethod::centre)
-                        run(centre);
+                        plane.integrals_over_discs(scratch.x.data(), scratch.y.data(),
+                                                   scratch.r.data(), m, scratch.value.data());
+                    }
+                    double operator()(const FastGrains::Batch& b, size_t i, size_t j) const
+                    {
+                        const double r_um = b.r[i];
+                        if (r_um <= 0.5 * pitch_um)
+                            return scratch.value[j];
+                        return r_um <= pitch_um
+                                   ? plane.integral_over_disc(b.x[i], b.y[i], r_um)
+                                   : exposure.integrate_over_disc(b.x[i], b.y[i], r_um);
+                    }
+                };
+                const Centre centre { scratch.plane };
+                const Disc disc { scratch.plane, layer.exposure, scratch.disc_batch,
+                                  scratch.plane.pitch_um() };
+                // Silver without inhibition (the common case) runs the
+                // kernel without the per-grain checks of MODEL.md 8, 10.
+                const bool plain = layer.image_reach == 1.0 && !layer.inhibition;
+                const auto run = [&](const auto& integral) {
+                    if (plain)
+                        develop_fast<true>(layer, pop, rect, scratch, c, integral);
                     else
-                        run(disc);
-                    grains += c.grains;
-                    developed += c.developed;
-                    photons += c.photons;
-                    events += c.events;
-                    scratch.population_end.push_back(scratch.discs.size());
-                    continue;
-                }
-                // Each bin's cells as far as its own grains' images reach.
-                pop.grains.for_each_grain_near(rect, std::max(1.0, layer.image_reach),
-                                               [&](const Grain& g) {
-                    poll_stop(scratch.grains_seen);
-                    const Disc disc { g.x_um, g.y_um, g.radius_um };
-                    if (!image_touches_rect(layer, disc, rect))
-                        return;
-                    const GrainOutcome o = simulate_grain(layer, pop, g);
-                    // Count each grain once: in the tile holding its centre.
-                    if (g.x_um >= rect.x0_um && g.x_um < rect.x1_um && g.y_um >= rect.y0_um
-                        && g.y_um < rect.y1_um) {
-                        ++grains;
-                        developed += o.developed;
-                        photons += o.photons;
-                        events += o.events;
-                        early += o.decided_early;
-                    }
-                    if (o.developed)
-                        scratch.discs.push_back(disc);
-                });
+                        develop_fast<false>(layer, pop, rect, scratch, c, integral);
+                };
+                if (pop.exposure == ExposureMethod::centre)
+                    run(centre);
+                else
+                    run(disc);
+                grains += c.grains;
+                developed += c.developed;
+                photons += c.photons;
+                events += c.events;
                 scratch.population_end.push_back(scratch.discs.size());
+                continue;
             }
-            LayerCounters& c = m_counters[l];
-            c.grains += grains;
-            c.developed += developed;
-            c.photons += photons;
-            c.events += events;
-            c.decided_early += early;
-            write_densities(scratch, l, x0, y0, x1, y1);
+            // Each bin's cells as far as its own grains' images reach.
+            pop.grains.for_each_grain_near(rect, std::max(1.0, layer.image_reach),
+                                           [&](const Grain& g) {
+                poll_stop(scratch.grains_seen);
+                const Disc disc { g.x_um, g.y_um, g.radius_um };
+                if (!image_touches_rect(layer, disc, rect))
+                    return;
+                const GrainOutcome o = simulate_grain(layer, pop, g);
+                // Count each grain once: in the tile holding its centre.
+                if (g.x_um >= rect.x0_um && g.x_um < rect.x1_um && g.y_um >= rect.y0_um
+                    && g.y_um < rect.y1_um) {
+                    ++grains;
+                    developed += o.developed;
+                    photons += o.photons;
+                    events += o.events;
+                    early += o.decided_early;
+                }
+                if (o.developed)
+                    scratch.discs.push_back(disc);
+            });
+            scratch.population_end.push_back(scratch.discs.size());
         }
+        LayerCounters& c = m_counters[l];
+        c.grains += grains;
+        c.developed += developed;
+        c.photons += photons;
+        c.events += events;
+        c.decided_early += early;
+        write_densities(scratch, l, x0, y0, x1, y1);
     }
 
     void fill_stats(RenderStats& stats) const
@@ -563,14 +570,18 @@ private:
 
     /// MODEL.md 5 at pixel scale (pixel_model.h): each pixel's exposure
     /// value is the area-weighted mean of the input pixels under it; its
-    /// transmittance is drawn from the layer's pixel model.
+    /// transmittance is drawn from the layer's pixel model. A layer with a
+    /// pixel floor (engine_plan.h) draws only the pixels whose expected
+    /// developed grains reach it; the others are rendered grain by grain
+    /// first (a pixel's path depends on its own exposure alone, so any
+    /// tiling gives the same image).
     void write_pixel_scale(TileScratch& scratch, size_t layer, int64_t x0, int64_t y0, int64_t x1,
-                           int64_t y1) const
+                           int64_t y1)
     {
         const int64_t tw = x1 - x0, th = y1 - y0;
+        const size_t n   = static_cast<size_t>(tw * th);
         const LayerPlan& plan = m_layers[layer];
-        scratch.fraction.resize(static_cast<size_t>(tw * th));
-        scratch.values.resize(static_cast<size_t>(tw * th));
+        scratch.values.resize(n);
         // The scan pixels' edges on the film.
         std::vector<double>& xs = scratch.edges_x;
         std::vector<double>& ys = scratch.edges_y;
@@ -586,19 +597,63 @@ private:
         // several takes its centre's).
         const double* log_factor = nullptr;
         if (plan.inhibition) {
-            scratch.log_factor.resize(static_cast<size_t>(tw * th));
+            scratch.log_factor.resize(n);
             for (size_t j = 0; j < static_cast<size_t>(th); ++j)
                 for (size_t i = 0; i < static_cast<size_t>(tw); ++i)
                     scratch.log_factor[j * static_cast<size_t>(tw) + i]
                         = plan.inhibition->at(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]));
             log_factor = scratch.log_factor.data();
         }
+        // Which pixels the model draws.
+        size_t drawn = n;
+        if (plan.pixel_floor > 0.0) {
+            scratch.drawn.resize(n);
+            drawn = 0;
+            for (size_t i = 0; i < n; ++i) {
+                const double lf        = log_factor ? log_factor[i] : 0.0;
+                const double developed = plan.pixel_model->at(scratch.values[i], lf)
+                                             .developed_per_pixel;
+                scratch.drawn[i] = developed >= plan.pixel_floor;
+                drawn += scratch.drawn[i];
+            }
+            // Grain by grain where a pixel is not drawn: in each band of
+            // kBand rows, the runs of columns that hold one, runs less than
+            // kBand columns apart joined (the drawn pixels among them are
+            // written again below).
+            constexpr int64_t kBand = 16;
+            scratch.columns.resize(static_cast<size_t>(tw));
+            for (int64_t b0 = y0; b0 < y1 && drawn < n; b0 += kBand) {
+                const int64_t b1 = std::min(b0 + kBand, y1);
+                std::fill(scratch.columns.begin(), scratch.columns.end(), uint8_t { 0 });
+                for (int64_t iy = b0; iy < b1; ++iy)
+                    for (int64_t i = 0; i < tw; ++i)
+                        scratch.columns[static_cast<size_t>(i)]
+                            |= !scratch.drawn[static_cast<size_t>((iy - y0) * tw + i)];
+                for (int64_t i = 0; i < tw;) {
+                    if (!scratch.columns[static_cast<size_t>(i)]) {
+                        ++i;
+                        continue;
+                    }
+                    int64_t end = i + 1, last = i + 1;  // one past the run's last such column
+                    for (; end < tw && end < last + kBand; ++end)
+                        if (scratch.columns[static_cast<size_t>(end)])
+                            last = end + 1;
+                    render_grains(scratch, layer, x0 + i, b0, x0 + last, b1);
+                    i = last;
+                }
+            }
+            if (drawn == 0)
+                return;
+        }
+        scratch.fraction.resize(n);
         sample_pixel_transmittance(*plan.pixel_model, plan.pixel_key, x0, y0, x1, y1,
                                    scratch.values.data(), log_factor, scratch.fraction.data());
         for (int64_t iy = y0; iy < y1; ++iy)
-            for (int64_t ix = x0; ix < x1; ++ix)
-                store_density(layer, ix, iy,
-                              1.0 - scratch.fraction[static_cast<size_t>((iy - y0) * tw + (ix - x0))]);
+            for (int64_t ix = x0; ix < x1; ++ix) {
+                const size_t i = static_cast<size_t>((iy - y0) * tw + (ix - x0));
+                if (drawn == n || scratch.drawn[i])
+                    store_density(layer, ix, iy, 1.0 - scratch.fraction[i]);
+            }
     }
 
     void store_transmittance(size_t layer, int64_t ix, int64_t iy, double transmittance) const

@@ -35,6 +35,8 @@ struct TileScratch {
     ExposurePlane plane;
     std::vector<double> values;
     std::vector<double> log_factor;  ///< per pixel, pixel scale of an inhibited layer
+    std::vector<uint8_t> drawn;  ///< per pixel, a layer with a pixel floor: at pixel scale
+    std::vector<uint8_t> columns;  ///< per column of a band of rows: one not drawn
     std::vector<double> edges_x, edges_y;  ///< the tile's scan pixel edges, um (pixel scale)
     /// Grains visited, for the stop check (poll_stop).
     uint32_t grains_seen = 0;
