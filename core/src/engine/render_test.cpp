@@ -166,7 +166,7 @@ TEST(Render, RoiIsACropOfTheFullRender)
     }
 }
 
-/// scale=mixed (what auto takes where a layer's fog develops too few
+/// scale=mixed (an expert override for a layer whose fog develops too few
 /// grains per pixel): each pixel is the pixel scale's (the same model and
 /// normals as scale=pixel) where its exposure develops enough grains, else
 /// the per-grain kernel's (the same grains as scale=grain with its curves),
