@@ -546,7 +546,8 @@ void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bou
 {
     for (size_t l = 0; l < out.size() && !c.exact; ++l) {
         LayerPlan& plan = out[l];
-        if (plan.dye_samples > 0 || (plan.pixel_model && plan.pixel_floor == 0.0))  // no coverage
+        const bool pixels_only = plan.pixel_model && plan.min_developed_per_pixel == 0.0;
+        if (plan.dye_samples > 0 || pixels_only)  // no coverage to choose
             continue;
         const double smallest_radius_um = smallest_mean_radius_um(c.stock.layers[l]);
         const double budget = std::max(kRasterShare * c.settings.tolerance,
@@ -648,7 +649,7 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         plan.pixel_model = std::move(model);
         plan.pixel_key   = hash_ids(grain_seed(c.scene), 0x9133, l);
         if (mixed)
-            plan.pixel_floor = kMinDevelopedPerPixel;
+            plan.min_developed_per_pixel = kMinDevelopedPerPixel;
         else
             plan.dye_samples = 0;  // no per-grain image
         const PixelModel& pm = *plan.pixel_model;
@@ -705,7 +706,7 @@ Status plan_layers(const Stock& stock, const SceneSettings& scene, const ImageVi
     // both paths.)
     for (size_t l = 0; l < out.size(); ++l)
         out[l].estimated_seconds
-            = (!out[l].pixel_model || out[l].pixel_floor > 0.0
+            = (!out[l].pixel_model || out[l].min_developed_per_pixel > 0.0
                    ? grain_path_seconds(c, l, out[l], c.roi_area_um2(), c.roi_pixels())
                    : 0.0)
               + (out[l].pixel_model ? pixel_path_seconds(c, c.roi_pixels()) : 0.0);

@@ -118,7 +118,7 @@ struct LayerPlan {
     /// grains (the model's developed_per_pixel at the pixel's exposure and
     /// log factor) reach it are drawn from the model; the others are
     /// rendered grain by grain, with the layer's grain paths above.
-    double pixel_floor = 0.0;
+    double min_developed_per_pixel = 0.0;
 };
 
 /// Empties the process's cache of pixel models (plan_layers builds a

@@ -261,18 +261,18 @@ TEST(EnginePlan, ALayerWithTooFewGrainsAtFogIsMixedOnlyWhenAsked)
     const std::vector<LayerPlan> plan = plan_of(stock, scene, grey, mixed);
     for (size_t l = 0; l < 2; ++l) {
         EXPECT_TRUE(plan[l].pixel_model) << l;
-        EXPECT_EQ(plan[l].pixel_floor, 0.0) << l;
+        EXPECT_EQ(plan[l].min_developed_per_pixel, 0.0) << l;
         EXPECT_EQ(plan[l].dye_samples, 0) << l;
     }
     const LayerPlan& blue = plan[2];
     ASSERT_TRUE(blue.pixel_model);
-    EXPECT_GT(blue.pixel_floor, 0.0);
+    EXPECT_GT(blue.min_developed_per_pixel, 0.0);
     EXPECT_GT(blue.dye_samples, 0);  // its grains keep their image
     ASSERT_TRUE(blue.notes.pixel_scale);
-    EXPECT_LT(blue.notes.pixel_scale->fog_grains, blue.pixel_floor);
+    EXPECT_LT(blue.notes.pixel_scale->fog_grains, blue.min_developed_per_pixel);
     EXPECT_GE(blue.pixel_model->at(0.18, blue.notes.pixel_scale->max_log_factor)
                   .developed_per_pixel,
-              blue.pixel_floor);
+              blue.min_developed_per_pixel);
 }
 
 }  // namespace

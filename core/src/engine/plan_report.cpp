@@ -166,7 +166,7 @@ void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& p
                 << " nodes, interpolation error " << format_g(pp.curve->max_interpolation_error())
                 << "; radii from tabulated quantiles: relative error of the mean area "
                 << format_g(pp.fast->mean_area_relative_error()) << ")";
-        if (pp.curve && pp.fast && (!plan.pixel_model || plan.pixel_floor > 0.0)
+        if (pp.curve && pp.fast && (!plan.pixel_model || plan.min_developed_per_pixel > 0.0)
             && !plan.notes.fog_alone)
             why << "; a grain whose uniform cannot reach the curve's bound at the brightest "
                    "pixel its disc can touch cannot develop: counted, not positioned (the same "
@@ -186,10 +186,10 @@ void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& p
             << (u->grain_s <= u->pixel_s
                     ? "grain by grain; "
                     : "the pixel scale where its statistics describe the layer; ");
-    if (plan.pixel_model && plan.pixel_floor > 0.0)
+    if (plan.pixel_model && plan.min_developed_per_pixel > 0.0)
         why << "pixel scale where a pixel's expected developed grains (at its exposure and log "
                "factor) reach "
-            << format_g(plan.pixel_floor) << ", grain by grain elsewhere; ";
+            << format_g(plan.min_developed_per_pixel) << ", grain by grain elsewhere; ";
     if (const auto& px = plan.notes.pixel_scale) {
         const PixelModel& pm = *plan.pixel_model;
         why << "pixel scale: " << (layer.image == LayerImage::dye ? "dye clouds" : "grains")
@@ -221,7 +221,7 @@ void describe(const PlanContext& c, const InhibitionPlan& inhibition, std::vecto
         std::ostringstream notes, path, why;
         describe_notes(c, c.stock.layers[l], plan, notes);
         describe_layer_image(c, l, plan, inhibition, path, why);
-        if (plan.pixel_model && plan.pixel_floor == 0.0) {
+        if (plan.pixel_model && plan.min_developed_per_pixel == 0.0) {
             // Each pixel's exposure is its input pixel's mean: no photons=.
             path << (plan.unlit ? "scale=pixel kinetics=fog" : "scale=pixel kinetics=curve");
             plan.path   = path.str();

@@ -213,7 +213,7 @@ Status render_negative(const Stock& stock, const SceneSettings& scene, const Ima
         // never the output.
         double grains_per_px = 0.0;
         for (size_t l = 0; l < stock.layers.size(); ++l)
-            if (!plan[l].pixel_model || plan[l].pixel_floor > 0.0)
+            if (!plan[l].pixel_model || plan[l].min_developed_per_pixel > 0.0)
                 for (const Population& pop : stock.layers[l].populations)
                     grains_per_px
                         += pop.grains_per_um2 * frame.scan_pitch_x_um * frame.scan_pitch_y_um;

@@ -606,14 +606,13 @@ private:
         }
         // Which pixels the model draws.
         size_t drawn = n;
-        if (plan.pixel_floor > 0.0) {
+        if (plan.min_developed_per_pixel > 0.0) {
             scratch.drawn.resize(n);
             drawn = 0;
             for (size_t i = 0; i < n; ++i) {
-                const double lf        = log_factor ? log_factor[i] : 0.0;
-                const double developed = plan.pixel_model->at(scratch.values[i], lf)
-                                             .developed_per_pixel;
-                scratch.drawn[i] = developed >= plan.pixel_floor;
+                const double developed = plan.pixel_model->developed_per_pixel_at(
+                    scratch.values[i], log_factor ? log_factor[i] : 0.0);
+                scratch.drawn[i] = developed >= plan.min_developed_per_pixel;
                 drawn += scratch.drawn[i];
             }
             // Grain by grain where a pixel is not drawn: in each band of

@@ -614,6 +614,17 @@ PixelModel::Moments PixelModel::at(double v, double log_factor) const
     return lerp(row(p.r0), row(p.r1), p.tr);
 }
 
+double PixelModel::developed_per_pixel_at(double v, double log_factor) const
+{
+    // at()'s interpolation of this one field (the same arithmetic).
+    const Position p = position(v, log_factor);
+    const auto l     = [](double x, double y, double t) { return x + t * (y - x); };
+    const auto row   = [&](size_t r) {
+        return l(m_rows[r][p.i0].developed_per_pixel, m_rows[r][p.i1].developed_per_pixel, p.ti);
+    };
+    return l(row(p.r0), row(p.r1), p.tr);
+}
+
 template <int K>
 void PixelModel::draw_at(double v, double log_factor, Draw& out) const
 {

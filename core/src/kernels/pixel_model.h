@@ -149,6 +149,8 @@ public:
     /// the table's range; 0 for a layer without inhibition); the mean and
     /// variance are interpolated in their logarithms.
     Moments at(double v, double log_factor = 0.0) const;
+    /// at(v, log_factor).developed_per_pixel alone (per pixel: no moments).
+    double developed_per_pixel_at(double v, double log_factor = 0.0) const;
 
     /// What the pixel kernel draws a pixel from: its mean, variance and
     /// copula filter (LagArray; taps on lags 0 to K = filter_lags(lags())
