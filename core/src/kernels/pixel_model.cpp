@@ -430,7 +430,7 @@ PixelModel::Moments PixelModel::compute(const std::vector<PixelPopulation>& popu
 
 PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double px_um,
                        double py_um, const ImageOverlap& image, double max_log_factor,
-                       int nthreads, double max_density)
+                       int nthreads, double max_density, const ShapeSampling* shape)
 {
     const double floor_t = std::pow(10.0, -max_density);  // the clamp's (0 without)
     const Integrator integrate(populations, px_um, py_um, image);
@@ -508,8 +508,11 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
         if (worst <= kDroppedCorrelation)
             m_lags = k;
     }
+    if (shape)
+        sample_shapes(populations, px_um, py_um, max_density, *shape, each);
     // The nodes as drawn: each with its copula filter, for the normals'
-    // correlation that skewed_draw bends into the model's.
+    // correlation that the law (skewed_draw's, or the sampled shape) bends
+    // into the model's.
     m_nodes.assign(static_cast<size_t>(rows), std::vector<Node>(cols));
     std::vector<double> copula_error(rows * cols, 0.0);
     each(rows * cols, [&](size_t k) {
@@ -522,11 +525,95 @@ PixelModel::PixelModel(const std::vector<PixelPopulation>& populations, double p
             return;
         LagArray normal {};
         for (size_t j = 0; j < normal.size(); ++j)
-            normal[j] = copula_normal_correlation(m.mean, m.variance, m.correlation[j]);
+            normal[j] = shaped() ? shape_normal_correlation(m_shapes[r][i], m.correlation[j])
+                                 : copula_normal_correlation(m.mean, m.variance, m.correlation[j]);
         copula_error[k] = copula_filter(normal, m_lags, node.taps);
     });
     for (double e : copula_error)
         m_max_copula_error = std::max(m_max_copula_error, e);
+}
+
+void PixelModel::sample_shapes(
+    const std::vector<PixelPopulation>& populations, double px_um, double py_um,
+    double max_density, const ShapeSampling& sampling,
+    const std::function<void(size_t, const std::function<void(size_t)>&)>& each)
+{
+    const size_t rows = m_rows.size(), cols = m_rows.front().size();
+    // The sampled grid: exposure node 0 (v = 0) and every kShapeStride-th
+    // from node 1 to the last; every kShapeRowStride-th row and the last.
+    std::vector<size_t> grid_cols { 0 }, grid_rows;
+    for (size_t i = 1; i < cols; i += kShapeStride)
+        grid_cols.push_back(i);
+    if (grid_cols.back() != cols - 1)
+        grid_cols.push_back(cols - 1);
+    for (size_t r = 0; r < rows; r += kShapeRowStride)
+        grid_rows.push_back(r);
+    if (grid_rows.back() != rows - 1)
+        grid_rows.push_back(rows - 1);
+    // Which grid node each takes its shape from: itself, or the last one
+    // sampled in its row where the moments have not moved (kShapeReuse).
+    const size_t gc = grid_cols.size(), gr = grid_rows.size();
+    std::vector<size_t> source(gc * gr);
+    std::vector<size_t> sampled;
+    const auto near = [](double a, double b) {
+        return std::fabs(a - b) <= kShapeReuse * std::max(std::fabs(a), std::fabs(b));
+    };
+    for (size_t b = 0; b < gr; ++b) {
+        size_t last = gc;  // none yet
+        for (size_t a = 0; a < gc; ++a) {
+            const size_t k = b * gc + a;
+            if (last < gc) {
+                const Moments& m0 = m_rows[grid_rows[b]][grid_cols[last]];
+                const Moments& m1 = m_rows[grid_rows[b]][grid_cols[a]];
+                if (near(m0.mean, m1.mean) && near(m0.variance, m1.variance)) {
+                    source[k] = b * gc + last;
+                    continue;
+                }
+            }
+            source[k] = k;
+            last      = a;
+            sampled.push_back(k);
+        }
+    }
+    std::vector<PixelShape> grid(gc * gr);
+    each(sampled.size(), [&](size_t s) {
+        const size_t k = sampled[s], b = k / gc, a = k % gc;
+        const size_t r = grid_rows[b], i = grid_cols[a];
+        const double v = i == 0 ? 0.0
+                                : std::exp(m_log_v0 + static_cast<double>(i - 1) / m_inv_step);
+        grid[k] = sample_pixel_shape(populations, *sampling.layer, px_um, py_um,
+                                     sampling.samples, max_density, v,
+                                     static_cast<double>(r) * kLogFactorStep,
+                                     hash_ids(0x5a4e7u, r, i));
+    });
+    for (size_t k = 0; k < grid.size(); ++k)
+        grid[k] = grid[source[k]];
+    m_shapes_sampled = static_cast<int>(sampled.size());
+    // Every node's shape: linear between the grid's nodes in both axes,
+    // standardised again.
+    const auto bracket = [](const std::vector<size_t>& g, size_t x, size_t& lo, double& t) {
+        lo = static_cast<size_t>(std::upper_bound(g.begin(), g.end(), x) - g.begin()) - 1;
+        if (lo + 1 >= g.size()) {
+            lo = g.size() - 1;
+            t  = 0.0;
+            return;
+        }
+        t = static_cast<double>(x - g[lo]) / static_cast<double>(g[lo + 1] - g[lo]);
+    };
+    m_shapes.assign(rows, std::vector<PixelShape>(cols));
+    each(rows * cols, [&](size_t k) {
+        const size_t r = k / cols, i = k % cols;
+        size_t a, b;
+        double ta, tb;
+        bracket(grid_cols, i, a, ta);
+        bracket(grid_rows, r, b, tb);
+        const size_t a1 = std::min(a + 1, gc - 1), b1 = std::min(b + 1, gr - 1);
+        PixelShape& s = m_shapes[r][i];
+        for (size_t j = 0; j < s.size(); ++j)
+            s[j] = (1.0 - tb) * ((1.0 - ta) * grid[b * gc + a][j] + ta * grid[b * gc + a1][j])
+                   + tb * ((1.0 - ta) * grid[b1 * gc + a][j] + ta * grid[b1 * gc + a1][j]);
+        standardise_shape(s);
+    });
 }
 
 std::string PixelModel::serialize() const
@@ -545,6 +632,10 @@ std::string PixelModel::serialize() const
     b.put(m_max_copula_error);
     b.put(m_max_mean_error);
     b.put(m_max_sd_error);
+    b.put(static_cast<uint64_t>(m_shapes.size()));
+    for (const std::vector<PixelShape>& row : m_shapes)
+        b.put(row);
+    b.put(m_shapes_sampled);
     return std::move(b.data);
 }
 
@@ -571,6 +662,16 @@ std::shared_ptr<const PixelModel> PixelModel::deserialize(const std::string& byt
     m->m_max_copula_error = b.get<double>();
     m->m_max_mean_error   = b.get<double>();
     m->m_max_sd_error     = b.get<double>();
+    // A shaped model's shapes: one row beside each row of moments.
+    const uint64_t shape_rows = b.get<uint64_t>();
+    if (!b.ok || (shape_rows != 0 && shape_rows != rows))
+        return nullptr;
+    for (uint64_t r = 0; r < shape_rows && b.ok; ++r) {
+        m->m_shapes.push_back(b.get_vector<PixelShape>());
+        if (m->m_shapes.back().size() != m->m_rows.front().size())
+            return nullptr;
+    }
+    m->m_shapes_sampled = b.get<int>();
     if (!b.done() || m->m_lags > kMaxLag)
         return nullptr;
     return m;
@@ -648,6 +749,13 @@ void PixelModel::draw_at(double v, double log_factor, Draw& out) const
         }
     out.mean     = std::exp(log_mean);
     out.variance = std::exp(log_variance);
+    if (shaped()) {
+        const size_t r[4] = { p.r0, p.r0, p.r1, p.r1 }, i[4] = { p.i0, p.i1, p.i0, p.i1 };
+        for (int c = 0; c < 4; ++c) {
+            out.shape[c]        = &m_shapes[r[c]][i[c]];
+            out.shape_weight[c] = w[c];
+        }
+    }
 }
 
 namespace {
@@ -794,8 +902,16 @@ void draw_block(const PixelModel& model, int64_t tw, int64_t th, const double* v
             mean[o]     = d.mean;
             variance[o] = d.variance;
             normal[o]   = norm > 0.0 ? noise / std::sqrt(norm) : 0.0;
+            if (model.shaped()) {
+                // The sampled shape at the pixel's normal: mean + sd S(z).
+                double s = 0.0;
+                for (int c = 0; c < 4; ++c)
+                    s += d.shape_weight[c] * shape_value(*d.shape[c], normal[o]);
+                transmittance[o] = std::clamp(d.mean + std::sqrt(d.variance) * s, 0.0, 1.0);
+            }
         }
-    skewed_draws(mean.data(), variance.data(), normal.data(), transmittance, n);
+    if (!model.shaped())
+        skewed_draws(mean.data(), variance.data(), normal.data(), transmittance, n);
 }
 
 }  // namespace

@@ -20,15 +20,19 @@
 // the normal (f * z), z i.i.d. standard normals keyed by absolute pixel
 // (deterministic for any tiling), f the symmetric filter whose
 // autocorrelation is the normals' correlation that skewed_draw turns into
-// the model's (copula_normal_correlation, copula_filter). Exact in mean and
-// variance; the shape and the correlations beyond the lags kept are
-// approximations, measured (the second by the model itself, the first
-// against the per-grain kernel in docs/performance); the planner uses it
-// only where grains are many per pixel.
+// the model's (copula_normal_correlation, copula_filter); or, for a layer
+// whose pixels hold few developed grains, from the law's shape sampled
+// from the model (pixel_shape.h). Exact in mean and variance; the shape
+// and the correlations beyond the lags kept are approximations, measured
+// (the second by the model itself, the first against the per-grain kernel
+// in docs/performance); the planner uses the two-moment law only where
+// grains are many per pixel, the sampled one where a pixel's exposure
+// develops enough of them.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -39,6 +43,7 @@
 #include "model/geometry.h"
 #include "expect/grain_counts.h"
 #include "filmgrain/stock.h"
+#include "kernels/pixel_shape.h"
 
 namespace filmgrain {
 
@@ -131,10 +136,33 @@ public:
     /// any count). `max_density`: the stock's clamp of -log10 T (MODEL.md
     /// 5); the interpolation errors count only where it does not clamp
     /// (the table itself is the same whatever it is).
+    /// `shape`: where given, the law's shape is sampled (pixel_shape.h)
+    /// for that layer, its dye image on `samples` rows or points a pixel,
+    /// at every kShapeStride-th exposure node of every kShapeRowStride-th
+    /// log-factor row (a node whose mean and variance lie within
+    /// kShapeReuse of the last sampled node's in its row takes that
+    /// node's shape), and interpolated between: pixels are then drawn as
+    /// mean + sd S(z) instead of skewed_draw.
+    struct ShapeSampling {
+        const Layer* layer = nullptr;
+        int samples        = 0;
+    };
     PixelModel(const std::vector<PixelPopulation>& populations, double px_um, double py_um,
                const ImageOverlap& image = ImageOverlap(), double max_log_factor = 0.0,
                int nthreads = 1,
-               double max_density = std::numeric_limits<double>::infinity());
+               double max_density = std::numeric_limits<double>::infinity(),
+               const ShapeSampling* shape = nullptr);
+    /// Exposure nodes (16 an octave) between sampled shapes: 2 an octave.
+    static constexpr int kShapeStride = 8;
+    /// Log-factor rows between sampled shapes: every 0.25.
+    static constexpr int kShapeRowStride = 5;
+    /// Relative change of mean and variance below which a node reuses the
+    /// last sampled shape of its row (the toe below fog, the shoulder).
+    static constexpr double kShapeReuse = 0.01;
+    /// Whether the law's shape is sampled (else skewed_draw's).
+    bool shaped() const { return !m_shapes.empty(); }
+    /// Shapes sampled (not reused) when the model was built.
+    int shapes_sampled() const { return m_shapes_sampled; }
 
     /// Step of the log-factor axis: the thinning exp(-L) is interpolated
     /// linearly between nodes 0.05 apart (relative error <= 3e-4, measured
@@ -158,6 +186,9 @@ public:
     struct Draw {
         double mean = 0.0, variance = 0.0;
         LagArray taps {};
+        /// A shaped model's: the four nodes' shapes and their weights.
+        const PixelShape* shape[4] = {};
+        double shape_weight[4] = {};
     };
     template <int K>
     void draw_at(double v, double log_factor, Draw& out) const;
@@ -211,11 +242,19 @@ private:
         double tr = 0.0, ti = 0.0;
     };
     Position position(double v, double log_factor) const;
+    /// The constructor's shape sampling (ShapeSampling), its nodes
+    /// computed through `each` (count, body), in parallel.
+    void sample_shapes(const std::vector<PixelPopulation>& populations, double px_um,
+                       double py_um, double max_density, const ShapeSampling& sampling,
+                       const std::function<void(size_t, const std::function<void(size_t)>&)>& each);
 
     double m_log_v0 = 0.0, m_inv_step = 0.0;
     /// One row of exposure nodes (node 0: v = 0) per log-factor node.
     std::vector<std::vector<Moments>> m_rows;
     std::vector<std::vector<Node>> m_nodes;  // the same nodes, as drawn
+    /// A shaped model's shape at every node (else empty).
+    std::vector<std::vector<PixelShape>> m_shapes;
+    int m_shapes_sampled = 0;
     int m_lags = 0;
     double m_max_dropped = 0.0, m_max_copula_error = 0.0;
     double m_max_mean_error = 0.0, m_max_sd_error = 0.0;

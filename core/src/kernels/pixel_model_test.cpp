@@ -5,6 +5,7 @@
 // PixelModel's, tolerances from the sampling variance.
 #include "kernels/pixel_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -71,7 +72,8 @@ struct LagSums {
 /// Of every population of `pps` (a layer's, in order: population p's
 /// grains seeded 100 + block with population index p).
 Sample monte_carlo(const std::vector<PixelPopulation>& pps, double v, const Layer* dye = nullptr,
-                   double factor = 1.0, int dye_samples = 32)
+                   double factor = 1.0, int dye_samples = 32,
+                   std::vector<double>* values = nullptr)
 {
     constexpr int kBlocks = 12, kN = 48;
     constexpr double kPitch = 4.0;
@@ -141,6 +143,8 @@ Sample monte_carlo(const std::vector<PixelPopulation>& pps, double v, const Laye
     s.se_mean = std::sqrt(vb / kBlocks);
     s.se_var  = s.var * std::sqrt(2.0 / (n / 2));
     s.se_rho  = 1.0 / std::sqrt(n / 2);
+    if (values)
+        *values = std::move(t_all);
     return s;
 }
 
@@ -595,11 +599,91 @@ TEST(PixelModel, SamplesAreTileIndependent)
 // The on-disk cache's form: a model read back from its bytes draws the
 // same pixels bit for bit, inhibited (two axes) or not; bytes cut short,
 // lengthened or not a model are refused.
+// The sampled law's shape (pixel_shape.h) against the same layer's pixels
+// rendered grain by grain by the fast kernel (monte_carlo: its own grains,
+// 12 blocks of 48^2 pixels, the dye image at 32 samples, as the shape's):
+// the coupler-limited layer above and a gaussian-cloud one, sparse to
+// dense. The shape's window has the moments' mean and variance (within 5
+// standard errors: the mean's sqrt(V correlation_sum / n), the variance's
+// as expect_moments's), and its standardised quantiles at z = -1.645, 0
+// and 1.645 are the grains' (standardised by their own mean and sd) within
+// 5 standard errors of the difference of two sample quantiles, each
+// sqrt(p (1 - p) / n) / f with f the density there (from the grains'
+// quantiles 0.02 either side) plus its standardisation's (the mean's 1 /
+// sqrt(n), the sd's z sqrt((m4 - 1) / (4 n)), m4 the grains' standardised
+// fourth moment), n halved for the neighbours' correlation as
+// expect_moments halves it.
+TEST(PixelModel, SampledShapeIsTheGrainsLaw)
+{
+    const TestLayer t;
+    Population fine = t.pop;
+    fine.grains_per_um2 = 4.0;
+    fine.diameter_um    = 0.4;
+    const PopulationGrains fine_grains(fine, 1, 0, 1);
+    Layer limited;
+    make_dye(limited, CloudProfile::disc, 1.5, 0.7);
+    limited.populations = { t.pop, fine };
+    limited.populations[0].max_dye_density = 0.45;
+    Layer gaussian;
+    make_dye(gaussian, CloudProfile::gaussian, 0.9, 0.7);
+    gaussian.populations = { t.pop };
+    for (const Layer* layer : { &limited, &gaussian }) {
+        std::vector<PixelPopulation> pops {
+            { &layer->populations[0], &t.grains, 40.0, &t.curve, &t.table } };
+        if (layer->populations.size() > 1)
+            pops.push_back({ &layer->populations[1], &fine_grains, 40.0, &t.curve, &t.table });
+        const ImageOverlap image(*layer);
+        for (double v : { 0.1, 0.4, 1.5 }) {
+            const std::string what = std::string(name_of(layer->cloud_profile)) + " v "
+                                     + std::to_string(v);
+            const PixelModel::Moments m = PixelModel::compute(pops, 4.0, 4.0, v, image);
+            ShapeWindow window;
+            const PixelShape shape = sample_pixel_shape(pops, *layer, 4.0, 4.0, 32, 20.0, v,
+                                                        0.0, hash_ids(11, v * 10), &window);
+            constexpr double kWindow = kShapeWindow * kShapeWindow;
+            EXPECT_NEAR(window.mean, m.mean, 5.0 * std::sqrt(m.variance * m.correlation_sum
+                                                             / kWindow))
+                << what;
+            EXPECT_NEAR(window.variance, m.variance,
+                        5.0 * m.variance * std::sqrt(2.0 / (kWindow / 2)))
+                << what;
+            std::vector<double> grains;
+            const Sample s = monte_carlo(pops, v, layer, 1.0, 32, &grains);
+            std::sort(grains.begin(), grains.end());
+            const double sd = std::sqrt(s.var), n = static_cast<double>(grains.size());
+            double m4 = 0.0;
+            for (double x : grains)
+                m4 += std::pow((x - s.mean) / sd, 4) / n;
+            const auto quantile = [&](double p) {
+                const double pos = std::clamp(p * n - 0.5, 0.0, n - 2.0);
+                const size_t i   = static_cast<size_t>(pos);
+                return (grains[i] + (pos - i) * (grains[i + 1] - grains[i]) - s.mean) / sd;
+            };
+            const double both = 1.0 / (kWindow / 2) + 1.0 / (n / 2);
+            for (double z : { -1.645, 0.0, 1.645 }) {
+                const double p = normal_cdf(z);
+                const double f = 0.04 / (quantile(p + 0.02) - quantile(p - 0.02));
+                const double se
+                    = std::sqrt((p * (1.0 - p) / (f * f) + 1.0 + z * z * (m4 - 1.0) / 4.0) * both);
+                EXPECT_NEAR(shape_value(shape, z), quantile(p), 5.0 * se) << what << " z " << z;
+            }
+        }
+    }
+}
+
 TEST(PixelModel, BytesGiveTheSameModel)
 {
     const TestLayer t;
-    for (double max_log_factor : { 0.0, 0.3 }) {
-        const PixelModel model(t.pops, 4.0, 4.0, ImageOverlap(), max_log_factor);
+    Layer dye;  // a shaped model too (pixel_shape.h)
+    make_dye(dye, CloudProfile::gaussian, 0.9, 0.7);
+    const PixelModel::ShapeSampling shape { &dye, 8 };
+    for (double max_log_factor : { 0.0, 0.3, -0.3 }) {
+        const bool shaped = max_log_factor < 0.0;
+        const PixelModel model(t.pops, 4.0, 4.0, shaped ? ImageOverlap(dye) : ImageOverlap(),
+                               std::fabs(max_log_factor), 0,
+                               std::numeric_limits<double>::infinity(),
+                               shaped ? &shape : nullptr);
+        EXPECT_EQ(model.shaped(), shaped);
         const std::string bytes = model.serialize();
         const std::shared_ptr<const PixelModel> back = PixelModel::deserialize(bytes);
         ASSERT_TRUE(back) << max_log_factor;
@@ -611,6 +695,10 @@ TEST(PixelModel, BytesGiveTheSameModel)
             v[i]          = 0.02 * static_cast<double>(i % 89);
             log_factor[i] = max_log_factor * static_cast<double>(i % 7) / 6.0;
         }
+        EXPECT_EQ(back->shaped(), shaped);
+        EXPECT_EQ(back->shapes_sampled(), model.shapes_sampled());
+        for (size_t i = 0; i < v.size(); ++i)
+            log_factor[i] = std::fabs(log_factor[i]);
         sample_pixel_transmittance(model, 3, 0, 0, 24, 24, v.data(), log_factor.data(), a.data());
         sample_pixel_transmittance(*back, 3, 0, 0, 24, 24, v.data(), log_factor.data(), b.data());
         EXPECT_EQ(a, b) << max_log_factor;
