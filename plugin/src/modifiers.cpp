@@ -433,7 +433,9 @@ const Modifier kModifiers[] = {
       "statistics for each pixel whose exposure develops >= 3.9 grains, grains elsewhere",
       [](const FilmgrainCommand&) {
           return engine_choice("pixel where every grain is under a pixel and even fog "
-                               "develops >= 3.9 grains per pixel, else grain");
+                               "develops >= 3.9 grains per pixel; mixed where fog develops "
+                               "fewer in a dye layer (its pixel law's shape sampled); else "
+                               "grain");
       },
       parse_scale_value },
     { "samples", "N",

@@ -149,7 +149,9 @@ void write_cached_pixel_model(const std::string& key, const PixelModel& model)
 #endif
 }
 
-/// The layer's pixel model (PixelModel's arguments), built once per
+/// The layer's pixel model (PixelModel's arguments; `shape_samples` > 0:
+/// its law's shape sampled, the dye image on that many rows or points a
+/// pixel), built once per
 /// process for the same arguments: a sequence's frames share it, as they
 /// share their tables. It depends on the stock, scene and scan, never on
 /// the pixels, and is the same for any thread count, so a model from the
@@ -157,7 +159,8 @@ void write_cached_pixel_model(const std::string& key, const PixelModel& model)
 /// value the build reads (each population's size law, density, coupler
 /// limit and photons per value, its table's serialization and its curve's
 /// extent, the image,
-/// the pitch, the log-factor range and the density clamp), compared in
+/// the pitch, the log-factor range, the density clamp and the dye image's
+/// rows a pixel its law's shape is sampled with, 0 for none), compared in
 /// full. Kept on disk too, as the tables are (kinetics_table.h): another
 /// process (a farm's next frame) reads it instead of building it.
 std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopulation>& pops,
@@ -165,7 +168,7 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
                                                      const Layer& layer,
                                                      const ImageOverlap& image,
                                                      double max_log_factor, int nthreads,
-                                                     double max_density)
+                                                     double max_density, int shape_samples)
 {
     std::string key;
     const auto put = [&key](auto v) {
@@ -175,6 +178,7 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
     put(py_um);
     put(max_log_factor);
     put(max_density);
+    put(shape_samples);
     put(static_cast<int>(layer.image));
     put(static_cast<int>(layer.cloud_profile));
     put(layer.cloud_diameter_ratio);
@@ -195,8 +199,10 @@ std::shared_ptr<const PixelModel> shared_pixel_model(const std::vector<PixelPopu
         return kept;
     std::shared_ptr<const PixelModel> model = read_cached_pixel_model(key);
     if (!model) {
+        const PixelModel::ShapeSampling shape { &layer, shape_samples };
         model = std::make_shared<const PixelModel>(pops, px_um, py_um, image, max_log_factor,
-                                                   nthreads, max_density);
+                                                   nthreads, max_density,
+                                                   shape_samples > 0 ? &shape : nullptr);
         write_cached_pixel_model(key, *model);
     }
     pixel_model_cache().put(std::move(key), model);
@@ -570,7 +576,8 @@ void choose_raster(const PlanContext& c, const std::vector<double>& kinetics_bou
 /// from its pixel statistics where they describe it: pixel correlations
 /// that end within kMaxLag pixels (at most 1% of their sum beyond), and
 /// enough developed grains per pixel even at zero exposure (fog) for its
-/// skewed law (measured in docs/performance).
+/// skewed law, or else a sampled law's shape and the per-grain kernel for
+/// the pixels that develop too few (measured in docs/performance).
 Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
                     std::vector<LayerPlan>& out)
 {
@@ -624,16 +631,23 @@ Status choose_scale(const PlanContext& c, const InhibitionPlan& inhibition,
         // An inhibited layer (MODEL.md 10): its statistics over the log
         // factor too, up to the stock's bound on it.
         const double max_log_factor = plan.inhibition ? inhibition.max_log_factor[l] : 0.0;
-        // Too few at fog: auto keeps the grains (the pixel law is not
-        // shown to hold there: for 500T's blue in 3 um pixels it does not,
-        // docs/performance); scale=mixed takes the pixel scale where a
-        // pixel's exposure develops enough.
-        if (!asked && fog_grains < kMinDevelopedPerPixel)
+        // Too few at fog (sparse): the two-moment law is off there (for
+        // 500T's blue in 3 um pixels 1.3-2.3x the grains' spread of
+        // density, docs/performance), so the law's shape is sampled where
+        // it can be (a dye layer: pixel_shape.h), with the image its
+        // grains would have; where it cannot, auto keeps the grains. Auto
+        // and scale=mixed draw a sparse layer's pixels from the pixel
+        // scale where their exposure develops enough, the rest grain by
+        // grain.
+        const bool sparse   = fog_grains < kMinDevelopedPerPixel;
+        const bool sampled  = sparse && can_sample_pixel_shape(layer);
+        if (!asked && sparse && !sampled)
             continue;
-        const bool mixed = asked == ScaleMethod::mixed && fog_grains < kMinDevelopedPerPixel;
+        const bool mixed        = sparse && asked != ScaleMethod::pixel;
+        const int shape_samples = sampled ? plan.dye_samples : 0;
         auto model = shared_pixel_model(pops, c.frame.scan_pitch_x_um, c.frame.scan_pitch_y_um,
                                         layer, image, max_log_factor, c.settings.nthreads,
-                                        c.stock.max_density);
+                                        c.stock.max_density, shape_samples);
         plan.setup_seconds += seconds_since(t0);
         if (c.cancelled())
             return Status::error("render cancelled");

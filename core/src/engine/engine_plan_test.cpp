@@ -239,40 +239,54 @@ TEST(EnginePlan, WhereTheRenderReadsTheWholeFrameAROIDecidesAsTheFrameDoes)
         EXPECT_FALSE(plan.unlit);
 }
 
-TEST(EnginePlan, ALayerWithTooFewGrainsAtFogIsMixedOnlyWhenAsked)
+TEST(EnginePlan, ALayerWithTooFewGrainsAtFogIsMixedWithASampledLaw)
 {
     // VISION3 500T in 3.06 um pixels (a 16 mm frame's, scanned 4K wide):
     // its blue fog develops about 2.4 grains a pixel, too few for the
-    // pixel scale, its red and green 7.4 and 6.6. auto keeps blue's grains
-    // (the pixel law is off there: docs/performance); scale=mixed draws at
-    // pixel scale the blue pixels whose exposure develops enough and keeps
-    // the grains' image for the others, and takes red and green wholly at
-    // pixel scale, as scale=pixel does.
+    // two-moment pixel law, its red and green 7.4 and 6.6. auto and
+    // scale=mixed draw at pixel scale, from a sampled law's shape, the
+    // blue pixels whose exposure develops enough and keep the grains'
+    // image for the others, and take red and green wholly at pixel scale;
+    // scale=pixel takes blue wholly at pixel scale, shaped. A silver layer
+    // as sparse has no sampled law: auto keeps its grains.
     Stock stock;
     ASSERT_TRUE(load_stock("vision3-500t", stock));
     SceneSettings scene;
     scene.width_mm = 256 * 3.06e-3;
     const Plate grey(256, 64, 0.18f, 0.18f, 0.18f);
-    const std::vector<LayerPlan> automatic = plan_of(stock, scene, grey);
-    ASSERT_EQ(automatic.size(), 3u);
-    EXPECT_FALSE(automatic[2].pixel_model);
     RenderSettings mixed;
     mixed.scale = ScaleMethod::mixed;
-    const std::vector<LayerPlan> plan = plan_of(stock, scene, grey, mixed);
-    for (size_t l = 0; l < 2; ++l) {
-        EXPECT_TRUE(plan[l].pixel_model) << l;
-        EXPECT_EQ(plan[l].min_developed_per_pixel, 0.0) << l;
-        EXPECT_EQ(plan[l].dye_samples, 0) << l;
+    for (const std::vector<LayerPlan>& plan :
+         { plan_of(stock, scene, grey), plan_of(stock, scene, grey, mixed) }) {
+        ASSERT_EQ(plan.size(), 3u);
+        for (size_t l = 0; l < 2; ++l) {
+            EXPECT_TRUE(plan[l].pixel_model) << l;
+            EXPECT_FALSE(plan[l].pixel_model && plan[l].pixel_model->shaped()) << l;
+            EXPECT_EQ(plan[l].min_developed_per_pixel, 0.0) << l;
+            EXPECT_EQ(plan[l].dye_samples, 0) << l;
+        }
+        const LayerPlan& blue = plan[2];
+        ASSERT_TRUE(blue.pixel_model);
+        EXPECT_TRUE(blue.pixel_model->shaped());
+        EXPECT_GT(blue.pixel_model->shapes_sampled(), 0);
+        EXPECT_GT(blue.min_developed_per_pixel, 0.0);
+        EXPECT_GT(blue.dye_samples, 0);  // its grains keep their image
+        ASSERT_TRUE(blue.notes.pixel_scale);
+        EXPECT_LT(blue.notes.pixel_scale->fog_grains, blue.min_developed_per_pixel);
+        EXPECT_GE(blue.pixel_model->at(0.18, blue.notes.pixel_scale->max_log_factor)
+                      .developed_per_pixel,
+                  blue.min_developed_per_pixel);
     }
-    const LayerPlan& blue = plan[2];
+    RenderSettings pixel;
+    pixel.scale = ScaleMethod::pixel;
+    const LayerPlan blue = plan_of(stock, scene, grey, pixel)[2];
     ASSERT_TRUE(blue.pixel_model);
-    EXPECT_GT(blue.min_developed_per_pixel, 0.0);
-    EXPECT_GT(blue.dye_samples, 0);  // its grains keep their image
-    ASSERT_TRUE(blue.notes.pixel_scale);
-    EXPECT_LT(blue.notes.pixel_scale->fog_grains, blue.min_developed_per_pixel);
-    EXPECT_GE(blue.pixel_model->at(0.18, blue.notes.pixel_scale->max_log_factor)
-                  .developed_per_pixel,
-              blue.min_developed_per_pixel);
+    EXPECT_TRUE(blue.pixel_model->shaped());
+    EXPECT_EQ(blue.min_developed_per_pixel, 0.0);
+    stock.layers[2].image = LayerImage::silver;
+    for (Population& p : stock.layers[2].populations)
+        p.max_dye_density = 0.0;  // a coupler limit is a dye layer's
+    EXPECT_FALSE(plan_of(stock, scene, grey)[2].pixel_model);
 }
 
 }  // namespace

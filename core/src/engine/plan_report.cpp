@@ -197,8 +197,14 @@ void describe_notes(const PlanContext& c, const Layer& layer, const LayerPlan& p
             << " developed per pixel at zero exposure; pixel statistics tabulated over exposure "
                "(interpolation error: mean "
             << format_g(pm.max_mean_error()) << ", sd " << format_g(pm.max_sd_error())
-            << "), two Gamma laws (covered and open part) weighted by the mean through a "
-               "Gaussian copula with the correlations to "
+            << "), "
+            << (pm.shaped()
+                    ? "the law's shape sampled from " + std::to_string(pm.shapes_sampled())
+                          + " windows of " + std::to_string(kShapeWindow) + "x"
+                          + std::to_string(kShapeWindow)
+                          + " pixels of developed grains (pixel_shape.h)"
+                    : std::string("two Gamma laws (covered and open part) weighted by the mean"))
+            << " through a Gaussian copula with the correlations to "
             << pm.lags()
             << " pixels each way (" << format_g(100.0 * pm.max_dropped_correlation())
             << "% of their sum beyond; its filter on " << filter_lags(pm.lags())
