@@ -3,12 +3,13 @@
 
     /usr/bin/python3 tools/perf/pixel_scale_report.py --bin build/plugin/filmgrain \\
         --out docs/performance [--stock tools/perf/stocks/real-scale.json] [--seeds 8] \\
-        [--width-mm MM] [--scale pixel|mixed]
+        [--width-mm MM] [--scale pixel|mixed|auto]
 
 Renders the built-in step wedge (1008x96 on 6.3 mm: 6.25 um pixels, or
 --width-mm) with
 `scale=pixel` (or `scale=mixed`: the pixel scale only where a pixel's
-exposure develops enough grains) and with the per-grain kernel (`scale=grain:kinetics=curve`,
+exposure develops enough grains; or auto: no scale given, each layer as
+the planner takes it) and with the per-grain kernel (`scale=grain:kinetics=curve`,
 what auto runs otherwise) for each seed, and compares them step by step
 (the step minus a 6-pixel margin) in distribution; the two renders share no
 grains, so every comparison is unpaired and its 95% CI comes from the
@@ -80,8 +81,9 @@ def main():
     ap.add_argument("--width-mm", type=float, default=None,
                     help="strip width (default: the wedge's 6.3 mm, 6.25 um pixels)")
     ap.add_argument("--name", default="pixel_scale", help="output file names (NAME.md, NAME.json)")
-    ap.add_argument("--scale", choices=("pixel", "mixed"), default="pixel",
-                    help="the scale= of the renders held against the kernel (default: pixel)")
+    ap.add_argument("--scale", choices=("pixel", "mixed", "auto"), default="pixel",
+                    help="the scale= of the renders held against the kernel (auto: none "
+                         "given; default: pixel)")
     ap.add_argument("--work", default=None)
     args = ap.parse_args()
     work = args.work or os.path.join(os.environ.get("TMPDIR", "/tmp"), "filmgrain-pixel-scale")
@@ -90,15 +92,17 @@ def main():
     stock = json.loads(subprocess.run([args.bin, "--print-stock", args.stock], check=True,
                                       capture_output=True, text=True).stdout)
     base = stock["base_density"]
-    configs = {"pixel": f"scale={args.scale}", "grain": "scale=grain:kinetics=curve"}
+    configs = {"pixel": [] if args.scale == "auto" else [f"scale={args.scale}"],
+               "grain": ["scale=grain", "kinetics=curve"]}
     if args.width_mm:
-        configs = {c: m + f":width_mm={args.width_mm}" for c, m in configs.items()}
+        configs = {c: m + [f"width_mm={args.width_mm}"] for c, m in configs.items()}
     per = {c: [] for c in configs}
     times = {c: [] for c in configs}
     paths = {}
     for seed in range(1, args.seeds + 1):
         for c, m in configs.items():
-            d, names, st, secs = render(args.bin, f"stock={args.stock}:{m}:seed={seed}",
+            d, names, st, secs = render(args.bin, ":".join([f"stock={args.stock}"] + m
+                                                           + [f"seed={seed}"]),
                                         f"{c}_{seed}", work)
             times[c].append(secs)
             paths[c] = [layer["path"] for layer in st["layers"]]
