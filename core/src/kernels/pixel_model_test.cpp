@@ -171,6 +171,33 @@ struct TestLayer {
     std::vector<PixelPopulation> pops { { &pop, &grains, 40.0, &curve, &table } };
 };
 
+/// The test layer's population and a fine one (4 per um^2, 0.4 um) in one
+/// dye layer of disc clouds 1.5 times the grain, density 0.7, the first
+/// population coupler-limited at 0.45 (dye.h FilledImage).
+struct CouplerLimitedLayer {
+    TestLayer t;
+    Population fine = [this] {
+        Population p     = t.pop;
+        p.grains_per_um2 = 4.0;
+        p.diameter_um    = 0.4;
+        return p;
+    }();
+    PopulationGrains fine_grains { fine, 1, 0, 1 };
+    Layer layer = [this] {
+        Layer l;
+        make_dye(l, CloudProfile::disc, 1.5, 0.7);
+        l.populations                    = { t.pop, fine };
+        l.populations[0].max_dye_density = 0.45;
+        return l;
+    }();
+    /// The pixel populations of `l` (this layer or a variant of it).
+    std::vector<PixelPopulation> pops_of(const Layer& l) const
+    {
+        return { { &l.populations[0], &t.grains, 40.0, &t.curve, &t.table },
+                 { &l.populations[1], &fine_grains, 40.0, &t.curve, &t.table } };
+    }
+};
+
 /// The model's mean, variance and neighbour correlation against a Monte
 /// Carlo sample, within 5 of its standard errors.
 void expect_moments(const Sample& s, const PixelModel::Moments& m, const std::string& what)
@@ -234,19 +261,9 @@ TEST(PixelModel, DyeMomentsMatchTheCloudsGrainByGrain)
 // sampling variance.
 TEST(PixelModel, CouplerLimitedMomentsMatchTheCloudsGrainByGrain)
 {
-    const TestLayer t;
-    Population fine = t.pop;
-    fine.grains_per_um2 = 4.0;
-    fine.diameter_um    = 0.4;
-    const PopulationGrains fine_grains(fine, 1, 0, 1);
-    Layer layer;
-    make_dye(layer, CloudProfile::disc, 1.5, 0.7);
-    layer.populations = { t.pop, fine };
-    layer.populations[0].max_dye_density = 0.45;
-    const std::vector<PixelPopulation> pops {
-        { &layer.populations[0], &t.grains, 40.0, &t.curve, &t.table },
-        { &layer.populations[1], &fine_grains, 40.0, &t.curve, &t.table },
-    };
+    const CouplerLimitedLayer c;
+    const Layer& layer                       = c.layer;
+    const std::vector<PixelPopulation> pops = c.pops_of(layer);
     const ImageOverlap image(layer);
     Layer added = layer;  // the same clouds, all adding
     added.populations[0].max_dye_density = 0.0;
@@ -258,10 +275,7 @@ TEST(PixelModel, CouplerLimitedMomentsMatchTheCloudsGrainByGrain)
         EXPECT_NEAR(m.mean, layer_mean_transmittance(layer, population_covers(pops, v)),
                     1e-12);
         // Not the statistics of the same clouds adding.
-        const std::vector<PixelPopulation> added_pops {
-            { &added.populations[0], &t.grains, 40.0, &t.curve, &t.table },
-            { &added.populations[1], &fine_grains, 40.0, &t.curve, &t.table },
-        };
+        const std::vector<PixelPopulation> added_pops = c.pops_of(added);
         const PixelModel::Moments a
             = PixelModel::compute(added_pops, 4.0, 4.0, v, ImageOverlap(added));
         EXPECT_GT(std::fabs(a.mean - m.mean), 5 * s.se_mean) << v;
@@ -596,42 +610,29 @@ TEST(PixelModel, SamplesAreTileIndependent)
             EXPECT_EQ(part[y * 16 + x], whole[(y + 16) * 32 + x + 16]);
 }
 
-// The on-disk cache's form: a model read back from its bytes draws the
-// same pixels bit for bit, inhibited (two axes) or not; bytes cut short,
-// lengthened or not a model are refused.
 // The sampled law's shape (pixel_shape.h) against the same layer's pixels
 // rendered grain by grain by the fast kernel (monte_carlo: its own grains,
 // 12 blocks of 48^2 pixels, the dye image at 32 samples, as the shape's):
-// the coupler-limited layer above and a gaussian-cloud one, sparse to
-// dense. The shape's window has the moments' mean and variance (within 5
-// standard errors: the mean's sqrt(V correlation_sum / n), the variance's
-// as expect_moments's), and its standardised quantiles at z = -1.645, 0
-// and 1.645 are the grains' (standardised by their own mean and sd) within
-// 5 standard errors of the difference of two sample quantiles, each
-// sqrt(p (1 - p) / n) / f with f the density there (from the grains'
-// quantiles 0.02 either side) plus its standardisation's (the mean's 1 /
-// sqrt(n), the sd's z sqrt((m4 - 1) / (4 n)), m4 the grains' standardised
-// fourth moment), n halved for the neighbours' correlation as
+// the coupler-limited layer above and its grains under gaussian clouds,
+// sparse to dense. The shape's window has the moments' mean and variance
+// (within 5 standard errors: the mean's sqrt(V correlation_sum / n), the
+// variance's as expect_moments's), and its standardised quantiles at z =
+// -1.645, 0 and 1.645 are the grains' (standardised by their own mean and
+// sd) within 5 standard errors of the difference of two sample quantiles,
+// each sqrt(p (1 - p) / n) / f with f the density there (from the grains'
+// quantiles 0.02 either side) plus its standardisation's (the mean's
+// 1 / sqrt(n), the sd's z sqrt((m4 - 1) / (4 n)), m4 the grains'
+// standardised fourth moment), n halved for the neighbours' correlation as
 // expect_moments halves it.
 TEST(PixelModel, SampledShapeIsTheGrainsLaw)
 {
-    const TestLayer t;
-    Population fine = t.pop;
-    fine.grains_per_um2 = 4.0;
-    fine.diameter_um    = 0.4;
-    const PopulationGrains fine_grains(fine, 1, 0, 1);
-    Layer limited;
-    make_dye(limited, CloudProfile::disc, 1.5, 0.7);
-    limited.populations = { t.pop, fine };
-    limited.populations[0].max_dye_density = 0.45;
-    Layer gaussian;
+    const CouplerLimitedLayer c;
+    Layer gaussian;  // the same grains under gaussian clouds, none limited
     make_dye(gaussian, CloudProfile::gaussian, 0.9, 0.7);
-    gaussian.populations = { t.pop };
-    for (const Layer* layer : { &limited, &gaussian }) {
-        std::vector<PixelPopulation> pops {
-            { &layer->populations[0], &t.grains, 40.0, &t.curve, &t.table } };
-        if (layer->populations.size() > 1)
-            pops.push_back({ &layer->populations[1], &fine_grains, 40.0, &t.curve, &t.table });
+    gaussian.populations                    = c.layer.populations;
+    gaussian.populations[0].max_dye_density = 0.0;
+    for (const Layer* layer : { &c.layer, static_cast<const Layer*>(&gaussian) }) {
+        const std::vector<PixelPopulation> pops = c.pops_of(*layer);
         const ImageOverlap image(*layer);
         for (double v : { 0.1, 0.4, 1.5 }) {
             const std::string what = std::string(name_of(layer->cloud_profile)) + " v "
@@ -671,6 +672,9 @@ TEST(PixelModel, SampledShapeIsTheGrainsLaw)
     }
 }
 
+// The on-disk cache's form: a model read back from its bytes draws the
+// same pixels bit for bit, inhibited (two axes) or not, its law's shape
+// sampled or not; bytes cut short, lengthened or not a model are refused.
 TEST(PixelModel, BytesGiveTheSameModel)
 {
     const TestLayer t;
