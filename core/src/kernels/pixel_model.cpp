@@ -43,12 +43,9 @@ double pixel_develop_probability(const PixelPopulation& p, double lambda)
 double population_cover(const PixelPopulation& pp, double v)
 {
     double sum = 0.0;
-    for (const SizeNode& node : size_quadrature(*pp.population)) {
-        const double r_um  = pp.grains->radius_at_z_um(node.z);
-        const double a_um2 = M_PI * r_um * r_um;
-        sum += node.weight * a_um2
-               * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
-    }
+    for_each_size_probability(pp, v, [&](const SizeNode& node, double, double a_um2, double p) {
+        sum += node.weight * a_um2 * p;
+    });
     return pp.population->grains_per_um2 * sum;
 }
 

@@ -65,6 +65,21 @@ struct PixelPopulation {
 /// last node.
 double pixel_develop_probability(const PixelPopulation& p, double lambda);
 
+/// Calls f(node, r_um, a_um2, probability) for every node of the
+/// population's size_quadrature at exposure value v: the disc's radius and
+/// area there and pixel_develop_probability at its mean photons. The one
+/// walk over sizes of the pixel scale's integrals and samples.
+template <typename F>
+void for_each_size_probability(const PixelPopulation& pp, double v, F&& f)
+{
+    for (const SizeNode& node : size_quadrature(*pp.population)) {
+        const double r_um  = pp.grains->radius_at_z_um(node.z);
+        const double a_um2 = M_PI * r_um * r_um;
+        f(node, r_um, a_um2,
+          pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2));
+    }
+}
+
 /// size_quadrature (grain_counts.h): the size nodes of every pixel-scale
 /// integral.
 

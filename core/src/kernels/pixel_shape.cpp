@@ -128,16 +128,14 @@ PixelShape sample_pixel_shape(const std::vector<PixelPopulation>& populations,
         radius_um.clear();
         cumulative.clear();
         double total = 0.0;
-        for (const SizeNode& node : size_quadrature(*pp.population)) {
+        for_each_size_probability(pp, v, [&](const SizeNode& node, double r_um, double,
+                                             double p) {
             if (std::fabs(node.z) > kShapeSizeZ)
-                continue;
-            const double r_um  = pp.grains->radius_at_z_um(node.z);
-            const double a_um2 = M_PI * r_um * r_um;
-            total += node.weight
-                     * pixel_develop_probability(pp, pp.photons_per_value_um2 * v * a_um2);
+                return;
+            total += node.weight * p;
             radius_um.push_back(r_um);
             cumulative.push_back(total);
-        }
+        });
         const double mean_count = pp.population->grains_per_um2 * total * thinning * area_um2;
         const uint64_t count    = total > 0.0 ? sample_poisson(mean_count, rng) : 0;
         for (uint64_t g = 0; g < count; ++g) {
